@@ -1,0 +1,63 @@
+"""Via-point commands: timing, file format, errors, and the shipped expert."""
+
+import numpy as np
+import pytest
+
+from jugglerl.commands import CommandError, ViaPointCommand, load_command, save_command
+from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl_envs import JuggleEnv
+
+
+def test_setpoints_follow_via_points_and_wrap_around_the_cycle():
+    command = ViaPointCommand(2.0, ((0.5, -1.0, 1.0), (1.5, -1.2, 2.0)), pan=0.1)
+    np.testing.assert_allclose(command.setpoints(0.0), [0.1, -1.2, 2.0])  # before t_1: last point
+    np.testing.assert_allclose(command.setpoints(0.5), [0.1, -1.0, 1.0])
+    np.testing.assert_allclose(command.setpoints(1.49), [0.1, -1.0, 1.0])
+    np.testing.assert_allclose(command.setpoints(1.5), [0.1, -1.2, 2.0])
+    np.testing.assert_allclose(command.setpoints(2.7), [0.1, -1.0, 1.0])  # next cycle
+
+
+def test_save_and_load_round_trip(tmp_path):
+    command = ViaPointCommand(2.5, ((0.0, -1.5, 2.1), (1.2, -1.5, 1.4)), name="mine")
+    for suffix in (".yaml", ".json"):
+        assert load_command(save_command(command, tmp_path / f"c{suffix}")) == command
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("cycle: 3.0\n", "missing key 'via_points'"),
+        (
+            "cycle: 3.0\nvia_points: [[0.0, -1.5, 2.0], [0.0, -1.5, 1.5]]\n",
+            "must increase strictly",
+        ),
+        ("cycle: 1.0\nvia_points: [[0.0, -1.5, 2.0], [1.5, -1.5, 1.5]]\n", "within [0, cycle=1.0)"),
+        ("cycle: -1\nvia_points: [[0.0, -1.5, 2.0]]\n", "cycle=-1.0 must be a positive"),
+        ("cycle: 3.0\nvia_points: [[0.0, -1.5]]\n", "via_points must be a list of [t, a2, a3]"),
+        ("cycle: 3.0\nvia_points: [[0.0, x, 2.0]]\n", "must be numbers"),
+        ("cycle: 3.0\nspeed: 2\nvia_points: [[0.0, -1.5, 2.0]]\n", "unknown keys ['speed']"),
+        ("cycle: [3.0\n", "not valid YAML"),
+        ("- 1\n- 2\n", "expected a mapping"),
+    ],
+)
+def test_malformed_command_file_gives_a_clear_error(tmp_path, content, message):
+    path = tmp_path / "bad.yaml"
+    path.write_text(content)
+    with pytest.raises(CommandError) as error:
+        load_command(path)
+    assert message in str(error.value) and str(path) in str(error.value)
+
+
+def test_missing_command_names_the_path(tmp_path):
+    with pytest.raises(CommandError, match="no command file at"):
+        load_command("no_such_command")
+    with pytest.raises(CommandError, match="not valid JSON"):
+        (tmp_path / "c.json").write_text("{")
+        load_command(tmp_path / "c.json")
+
+
+def test_expert_juggles_at_least_seven_throws_in_the_paper_preset():
+    env = JuggleEnv()
+    metrics = run_episode(env, CommandPolicy(load_command("expert"), env), seed=0)
+    assert metrics.throws >= 7
+    assert metrics.catches >= metrics.throws
