@@ -258,8 +258,11 @@ class JuggleEnv(MujocoEnv):
         return math.hypot(local[0], local[1]), float(local[2])
 
     def _measure_ball_in_cup(self) -> None:
-        """Set ``_in_cup`` (centre inside the cone, below the rim) and ``_clear_of_cup`` (more than
-        a ball radius outside it: a ball sloshing up to the rim is neither caught again nor lost)."""
+        """Set ``_in_cup`` (centre inside the cone, below the rim) and ``_clear_of_cup``.
+
+        Clear means more than a ball radius outside the cone: a ball sloshing up to the rim is
+        neither caught again nor counted as lost.
+        """
         radial, height = self.ball_in_cup_frame()
         self._in_cup = 0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS
         margin = self.ball_radius
