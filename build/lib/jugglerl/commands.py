@@ -1,0 +1,134 @@
+"""Open-loop cyclic via-point commands.
+
+The paper's policy θ = (d, (t_1, a2_1, a3_1), …, (t_p, a2_p, a3_p)).
+
+A command repeats every ``cycle`` seconds (d). At cycle time t_i the servo setpoints of
+``shoulder_lift_joint`` (a2) and ``elbow_joint`` (a3) jump to the via-point's angles (radians) and
+stay there until the next via-point; MuJoCo's position servos make the motion. Before the first
+via-point of a cycle the last one's setpoints hold (the cycle wraps). ``shoulder_pan_joint`` stays
+at ``pan`` (radians).
+
+File format (YAML or JSON, same keys)::
+
+    name: expert
+    cycle: 3.0            # d, seconds
+    pan: 0.0              # optional, radians
+    via_points:           # [t (s), a2 (rad), a3 (rad)], t strictly increasing in [0, cycle)
+      - [0.0, -1.5708, 2.2]
+      - [1.5, -1.5708, 1.5]
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+COMMANDS_PACKAGE = "jugglerl.configs"
+COMMANDS_FOLDER = "commands"
+
+
+class CommandError(ValueError):
+    """A command file or value that cannot be used; the message says what and where."""
+
+
+@dataclass(frozen=True)
+class ViaPointCommand:
+    """A cyclic via-point command. Times in seconds, angles in radians."""
+
+    cycle: float
+    via_points: tuple[tuple[float, float, float], ...]
+    pan: float = 0.0
+    name: str = field(default="command", compare=False)
+
+    def __post_init__(self):
+        if not np.isfinite(self.cycle) or self.cycle <= 0:
+            raise CommandError(f"cycle={self.cycle!r} must be a positive number of seconds")
+        if not self.via_points:
+            raise CommandError("via_points is empty: a command needs at least one via-point")
+        if any(len(point) != 3 for point in self.via_points):
+            raise CommandError("via_points must be a list of [t, a2, a3] finite numbers")
+        points = np.asarray(self.via_points, dtype=float)
+        if not np.isfinite(points).all():
+            raise CommandError("via_points must be a list of [t, a2, a3] finite numbers")
+        times = points[:, 0]
+        if times[0] < 0 or times[-1] >= self.cycle or np.any(np.diff(times) <= 0):
+            raise CommandError(
+                f"via-point times {times.tolist()} must increase strictly"
+                f" within [0, cycle={self.cycle})"
+            )
+
+    def setpoints(self, time: float) -> np.ndarray:
+        """Setpoints (pan, lift, elbow) in radians at ``time`` seconds after the command starts."""
+        phase = time % self.cycle
+        times = [t for t, _, _ in self.via_points]
+        index = int(np.searchsorted(times, phase, side="right")) - 1  # -1 wraps to the last point
+        _, lift, elbow = self.via_points[index]
+        return np.array([self.pan, lift, elbow])
+
+    def to_dict(self) -> dict:
+        return {
+            "name": self.name,
+            "cycle": self.cycle,
+            "pan": self.pan,
+            "via_points": [list(p) for p in self.via_points],
+        }
+
+
+def command_from_dict(data: dict, source: str = "command") -> ViaPointCommand:
+    """Build a command from the file format's mapping; errors name ``source`` and the key."""
+    if not isinstance(data, dict):
+        raise CommandError(f"{source}: expected a mapping with keys cycle, via_points (and pan)")
+    unknown = set(data) - {"name", "cycle", "pan", "via_points"}
+    if unknown:
+        raise CommandError(
+            f"{source}: unknown keys {sorted(unknown)}; valid: name, cycle, pan, via_points"
+        )
+    for key in ("cycle", "via_points"):
+        if key not in data:
+            raise CommandError(f"{source}: missing key '{key}'")
+    try:
+        points = tuple(tuple(float(v) for v in point) for point in data["via_points"])
+        cycle = float(data["cycle"])
+        pan = float(data.get("pan", 0.0))
+    except (TypeError, ValueError) as error:
+        raise CommandError(
+            f"{source}: cycle, pan and via_points must be numbers ({error})"
+        ) from None
+    try:
+        return ViaPointCommand(cycle, points, pan, name=str(data.get("name", Path(source).stem)))
+    except CommandError as error:
+        raise CommandError(f"{source}: {error}") from None
+
+
+def named_command_path(name: str) -> Path:
+    """Path of a command shipped in ``configs/commands/`` (e.g. ``expert``)."""
+    return Path(str(resources.files(COMMANDS_PACKAGE).joinpath(COMMANDS_FOLDER, f"{name}.yaml")))
+
+
+def load_command(name_or_path: str | Path) -> ViaPointCommand:
+    """Load a command by shipped name (``expert``) or from a ``.yaml``/``.yml``/``.json`` file."""
+    path = Path(name_or_path)
+    if path.suffix.lower() not in (".yaml", ".yml", ".json"):
+        path = named_command_path(str(name_or_path))
+    if not path.is_file():
+        raise CommandError(f"no command file at {path}")
+    try:
+        text = path.read_text()
+        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as error:
+        raise CommandError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from None
+    return command_from_dict(data, str(path))
+
+
+def save_command(command: ViaPointCommand, path: str | Path) -> Path:
+    """Write ``command`` as YAML (or JSON for a ``.json`` path)."""
+    path = Path(path)
+    data = command.to_dict()
+    text = json.dumps(data, indent=2) if path.suffix.lower() == ".json" else yaml.safe_dump(data)
+    path.write_text(text)
+    return path

@@ -1,0 +1,21 @@
+"""Bridges between Hydra configs and the package's objects."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+from omegaconf import DictConfig, OmegaConf
+
+from jugglerl_envs import JuggleEnv
+
+
+def make_juggle_env(env_cfg: DictConfig, **overrides) -> gym.Env:
+    """A ``JuggleEnv`` from a ``configs/env/*.yaml`` group, with keyword ``overrides`` applied.
+
+    Bad values raise ``ValueError`` naming the key (the env validates its arguments).
+    """
+    kwargs = OmegaConf.to_container(env_cfg, resolve=True)
+    kwargs.update({key: value for key, value in overrides.items() if value is not None})
+    try:
+        return JuggleEnv(**kwargs)
+    except TypeError as error:  # an unknown key in the env group
+        raise ValueError(f"env config: {error}") from None

@@ -1,0 +1,1 @@
+"""Hydra configs and command files, installed as package data of ``jugglerl.configs``."""

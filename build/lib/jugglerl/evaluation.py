@@ -1,0 +1,69 @@
+"""Run one episode of a policy in the juggling env and summarise it as the metrics we report."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Protocol
+
+import gymnasium as gym
+import numpy as np
+
+from jugglerl.commands import ViaPointCommand
+
+
+class Policy(Protocol):
+    """Anything that maps an observation and the episode time (s) to a normalised action."""
+
+    def reset(self) -> None: ...
+
+    def act(self, observation: np.ndarray, time: float) -> np.ndarray: ...
+
+
+class CommandPolicy:
+    """Plays an open-loop ``ViaPointCommand`` in an env: ignores the observation, reads the time."""
+
+    def __init__(self, command: ViaPointCommand, env: gym.Env):
+        self.command = command
+        self._to_action = env.unwrapped.ctrl_to_action
+
+    def reset(self) -> None:
+        """Open loop: nothing to forget between episodes."""
+
+    def act(self, observation: np.ndarray, time: float) -> np.ndarray:
+        return self._to_action(self.command.setpoints(time))
+
+
+@dataclass
+class EpisodeMetrics:
+    """What one episode achieved. Times in seconds of simulated time."""
+
+    throws: int
+    catches: int
+    max_consecutive_catches: int
+    time_to_drop: float | None  # None when the ball was never dropped
+    duration: float  # simulated seconds the episode lasted
+    seed: int | None
+    physics_error: str = ""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> EpisodeMetrics:
+    """Reset ``env`` with ``seed`` and step ``policy`` until the episode ends."""
+    observation, info = env.reset(seed=seed)
+    policy.reset()
+    terminated = truncated = False
+    while not (terminated or truncated):
+        action = policy.act(observation, info["time"])
+        observation, _, terminated, truncated, info = env.step(action)
+    dropped = terminated and not info["physics_error"]
+    return EpisodeMetrics(
+        throws=int(info["throws"]),
+        catches=int(info["catches"]),
+        max_consecutive_catches=int(info["max_consecutive_catches"]),
+        time_to_drop=round(info["time"], 6) if dropped else None,
+        duration=round(info["time"], 6),
+        seed=seed,
+        physics_error=info["physics_error"],
+    )

@@ -1,0 +1,1 @@
+"""MJCF scene files, installed as package data of ``jugglerl_envs.assets``."""

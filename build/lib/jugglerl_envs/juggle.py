@@ -1,0 +1,319 @@
+"""The juggling environment: a UR5e with a cone cup throws and catches one ball.
+
+Gymnasium id ``JuggleRL/Juggle-v0`` (registered by ``import jugglerl`` or ``import jugglerl_envs``).
+Its defaults are the paper preset (gravity -2 m/s², the authors' code); see ``configs/env/``.
+
+## Action
+``Box(-1, 1, (3,), float32)``: setpoints of the position servos of ``shoulder_pan_joint``,
+``shoulder_lift_joint`` and ``elbow_joint``, mapped linearly onto the actuators' control ranges
+(radians): pan [-π/2, π/2], lift [-π, 0], elbow [0, π]. Action 0 puts the upper arm vertical and
+the forearm level. The wrist joints are held at ``wrist_angles`` by their own servos.
+
+## Observation
+``Box(-inf, inf, (18,), float64)``:
+
+| index | what | unit |
+| --- | --- | --- |
+| 0-2 | angles of the 3 actuated joints | rad |
+| 3-5 | their velocities | rad/s |
+| 6-8 | ball position | m |
+| 9-11 | ball velocity | m/s |
+| 12-14 | cup position (site ``cup``, the cone's throat) | m |
+| 15-17 | cup velocity | m/s |
+
+Cup position and velocity come from the kinematics of the last physics step (MuJoCo computes them
+before integrating), 2 ms older than the joint and ball states at the default timestep.
+
+## Reward (kwarg ``reward``)
+- ``throws``: 1 for each throw (the ball crossing ``threshold`` going up in free flight, see
+  ``jugglerl_envs.events``); the paper's reward 1 and the DPS objective.
+- ``distance``: inverse cup–ball distance, bounded: ``min(1, 0.05 m / distance)``
+  (paper's reward 2).
+- ``contacts``: number of ball–arm contacts (arm links and cup plates) after the step (reward 3).
+
+## Start state
+Arm at ``home`` (pan, lift, elbow) with the wrist at ``wrist_angles``, at rest; the ball at rest
+``drop_height`` above the cup, offset horizontally by up to ``reset_noise`` metres (uniform).
+
+## Episode end
+Terminated when the ball falls below 0.1 m (dropped) or the physics goes bad (NaN, or any MuJoCo
+warning: ``info["physics_error"]`` says which; the env never raises). Truncated after
+``duration`` seconds of simulated time.
+
+## Info
+``throws``, ``catches``, ``max_consecutive_catches`` (episode totals), ``ball_height`` (m),
+``in_cup`` (bool), ``peak_joint_speed`` (episode maximum of each actuated joint's speed, rad/s,
+sampled every env step), ``time`` (s), ``physics_error`` ("" when fine).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+from gymnasium import spaces
+from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+
+from jugglerl_envs import scene
+from jugglerl_envs.events import JuggleEvents
+from jugglerl_envs.validation import check_choice, check_number, check_vector
+
+REWARDS = ("throws", "distance", "contacts")
+DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
+DISTANCE_SCALE = 0.05  # m: the distance reward is 1 within this distance of the cup
+PAPER_HOME = (0.0, -1.5708, 2.15)  # rad: the paper preset (configs/env/paper.yaml)
+PAPER_WRIST = (-2.0, 1.5708, 0.0)
+
+
+class JuggleEnv(MujocoEnv):
+    """UR5e juggling env; see the module docstring for spaces, rewards and episode end."""
+
+    metadata = {"render_modes": ["human", "rgb_array", "depth_array"]}
+
+    def __init__(
+        self,
+        gravity: float = -2.0,
+        duration: float = 120.0,
+        threshold: float = 1.0,
+        reward: str = "throws",
+        frame_skip: int = 10,
+        timestep: float = 0.002,
+        ball_radius: float = 0.035,
+        ball_mass: float = 0.1,
+        reset_noise: float = 0.0,
+        joint_speed_limit: float | None = None,
+        drop_height: float = 0.5,
+        home: tuple[float, float, float] = PAPER_HOME,
+        wrist_angles: tuple[float, float, float] = PAPER_WRIST,
+        render_mode: str | None = None,
+        width: int = 640,
+        height: int = 480,
+        camera_name: str | None = "side",
+    ):
+        self.gravity = check_number("gravity", gravity, -50.0, 0.0)
+        self.duration = check_number("duration", duration, 0.0, 1e6, low_open=True)
+        self.threshold = check_number("threshold", threshold, 0.0, 10.0, low_open=True)
+        self.reward_kind = check_choice("reward", reward, REWARDS)
+        frame_skip = check_number("frame_skip", frame_skip, 1, 1000, integer=True)
+        self.timestep = check_number("timestep", timestep, 0.0, 0.01, low_open=True)
+        self.ball_radius = check_number("ball_radius", ball_radius, 0.01, 0.09)
+        self.ball_mass = check_number("ball_mass", ball_mass, 0.0, 10.0, low_open=True)
+        self.reset_noise = check_number("reset_noise", reset_noise, 0.0, 0.05)
+        self.joint_speed_limit = (
+            None
+            if joint_speed_limit is None
+            else check_number("joint_speed_limit", joint_speed_limit, 0.0, 100.0, low_open=True)
+        )
+        self.drop_height = check_number("drop_height", drop_height, 0.0, 2.0)
+        self.home = np.array(check_vector("home", home, 3, -2 * math.pi, 2 * math.pi))
+        self.wrist_angles = np.array(
+            check_vector("wrist_angles", wrist_angles, 3, -2 * math.pi, 2 * math.pi)
+        )
+        if render_mode is not None:
+            check_choice("render_mode", render_mode, self.metadata["render_modes"])
+
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / (timestep * frame_skip))}
+        observation_space = spaces.Box(-np.inf, np.inf, shape=(18,), dtype=np.float64)
+        super().__init__(
+            scene.scene_path(),
+            frame_skip,
+            observation_space,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+            camera_name=camera_name,
+        )
+        self._cache_ids()
+        self._events = JuggleEvents(self.threshold)
+        self._steps = 0
+        self._max_steps = max(1, round(self.duration / self.dt))
+
+    # --- set-up -----------------------------------------------------------------------------
+    def _initialize_simulation(self):
+        model = scene.load_model(self.gravity, self.timestep, self.ball_radius, self.ball_mass)
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
+        return model, mujoco.MjData(model)
+
+    def _set_action_space(self):
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
+        return self.action_space
+
+    def _cache_ids(self) -> None:
+        m = self.model
+        self._arm_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in scene.ARM_JOINTS])
+        self._arm_qvel = np.array([m.jnt_dofadr[m.joint(j).id] for j in scene.ACTUATED_JOINTS])
+        ball_joint = m.body(scene.BALL_BODY).jntadr[0]
+        self._ball_qpos = m.jnt_qposadr[ball_joint]
+        self._ball_qvel = m.jnt_dofadr[ball_joint]
+        self._cup_site = m.site(scene.CUP_SITE).id
+        self._ball_geom = m.geom(scene.BALL_GEOM).id
+        self._contact_sensor = m.sensor_adr[m.sensor(scene.BALL_CONTACT_SENSOR).id]
+        arm_root = m.body(scene.ARM_ROOT_BODY).id
+        arm_bodies = [b for b in range(m.nbody) if self._has_ancestor(b, arm_root)]
+        self._arm_geoms = np.flatnonzero(np.isin(m.geom_bodyid, arm_bodies))
+        ranges = m.actuator_ctrlrange[:3]
+        self._ctrl_centre = ranges.mean(axis=1)
+        self._ctrl_half_range = (ranges[:, 1] - ranges[:, 0]) / 2
+        self._site_velocity = np.zeros(6)
+
+    def _has_ancestor(self, body: int, ancestor: int) -> bool:
+        while body != ancestor and body != 0:
+            body = self.model.body_parentid[body]
+        return body == ancestor
+
+    # --- action mapping ---------------------------------------------------------------------
+    def action_to_ctrl(self, action: np.ndarray) -> np.ndarray:
+        """Servo setpoints (rad) for a normalised action in [-1, 1] (clipped)."""
+        clipped = np.minimum(np.maximum(action, -1.0), 1.0)  # np.clip is slow on tiny arrays
+        return self._ctrl_centre + clipped * self._ctrl_half_range
+
+    def ctrl_to_action(self, ctrl: np.ndarray) -> np.ndarray:
+        """Normalised action for servo setpoints in radians (inverse of ``action_to_ctrl``)."""
+        return ((np.asarray(ctrl) - self._ctrl_centre) / self._ctrl_half_range).astype(np.float32)
+
+    # --- episode ----------------------------------------------------------------------------
+    def reset_model(self) -> np.ndarray:
+        qpos = self.init_qpos.copy()
+        qpos[self._arm_qpos] = np.concatenate([self.home, self.wrist_angles])
+        self.data.qpos[:] = qpos
+        self.data.qvel[:] = 0.0
+        self.data.ctrl[:] = qpos[self._arm_qpos]
+        mujoco.mj_forward(self.model, self.data)
+        offset = self.np_random.uniform(-self.reset_noise, self.reset_noise, size=2)
+        start = self.data.site_xpos[self._cup_site] + np.array([*offset, self.drop_height])
+        self.data.qpos[self._ball_qpos : self._ball_qpos + 3] = start
+        self.data.qpos[self._ball_qpos + 3 : self._ball_qpos + 7] = (1.0, 0.0, 0.0, 0.0)
+        mujoco.mj_forward(self.model, self.data)
+
+        self._steps = 0
+        self._setpoint = self.data.ctrl[:3].copy()
+        self._peak_joint_speed = np.zeros(3)
+        self._measure_ball_in_cup()
+        self._events.reset(self._ball_height(), self._clear_of_cup)
+        self._physics_error = ""
+        return self._get_obs()
+
+    def _get_reset_info(self) -> dict:
+        return self._info()
+
+    def step(self, action):
+        target = self.action_to_ctrl(np.asarray(action, dtype=np.float64))
+        self._simulate(target)
+        self._steps += 1
+        self._physics_error = self._check_physics()
+
+        height = self._ball_height()
+        self._measure_ball_in_cup()
+        below_cup = height < self.data.site_xpos[self._cup_site, 2]
+        throws = self._events.update(
+            height, self._ball_in_flight(), self._in_cup, self._clear_of_cup, below_cup
+        )
+        speeds = np.abs(self.data.qvel[self._arm_qvel])
+        self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
+
+        obs = self._get_obs()
+        reward = self._reward(throws)
+        terminated = bool(self._physics_error) or height < DROP_HEIGHT
+        truncated = self._steps >= self._max_steps and not terminated
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, terminated, truncated, self._info()
+
+    def _simulate(self, target: np.ndarray) -> None:
+        """Advance ``frame_skip`` physics steps towards the servo ``target`` (rad)."""
+        if self.joint_speed_limit is None:
+            self.data.ctrl[:3] = target
+            mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
+            return
+        max_change = self.joint_speed_limit * self.model.opt.timestep
+        for _ in range(self.frame_skip):
+            self._setpoint += np.clip(target - self._setpoint, -max_change, max_change)
+            self.data.ctrl[:3] = self._setpoint
+            mujoco.mj_step(self.model, self.data)
+
+    def _check_physics(self) -> str:
+        """Name of the first MuJoCo warning raised this episode, or of a NaN state; "" if none."""
+        counts = self.data.warning.number
+        if counts.any():
+            return f"{mujoco.mjtWarning(np.flatnonzero(counts)[0]).name} at t={self.data.time:.3f}s"
+        if not math.isfinite(self.data.qpos.sum() + self.data.qvel.sum()):  # NaN/inf anywhere
+            return f"non-finite state at t={self.data.time:.3f}s"
+        return ""
+
+    # --- measurements -----------------------------------------------------------------------
+    def _ball_height(self) -> float:
+        return float(self.data.qpos[self._ball_qpos + 2])
+
+    def _ball_in_flight(self) -> bool:
+        return self.data.sensordata[self._contact_sensor] == 0
+
+    def ball_in_cup_frame(self) -> tuple[float, float]:
+        """Ball centre in the cup frame (m): (distance from the cone axis, height above throat)."""
+        offset = (
+            self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
+            - self.data.site_xpos[self._cup_site]
+        )
+        local = self.data.site_xmat[self._cup_site].reshape(3, 3).T @ offset
+        return math.hypot(local[0], local[1]), float(local[2])
+
+    def _measure_ball_in_cup(self) -> None:
+        """Set ``_in_cup`` (centre inside the cone, below the rim) and ``_clear_of_cup``.
+
+        Clear means more than a ball radius outside the cone: a ball sloshing up to the rim is
+        neither caught again nor counted as lost.
+        """
+        radial, height = self.ball_in_cup_frame()
+        self._in_cup = 0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS
+        margin = self.ball_radius
+        self._clear_of_cup = (
+            height > scene.CUP_DEPTH + margin or radial > scene.CUP_TOP_RADIUS + margin
+        )
+
+    def _cup_velocity(self) -> np.ndarray:
+        mujoco.mj_objectVelocity(
+            self.model, self.data, mujoco.mjtObj.mjOBJ_SITE, self._cup_site, self._site_velocity, 0
+        )
+        return self._site_velocity[3:]
+
+    def _ball_arm_contacts(self) -> int:
+        contacts = self.data.contact
+        geoms = np.stack([contacts.geom1, contacts.geom2], axis=1)
+        with_ball = (geoms == self._ball_geom).any(axis=1)
+        other = np.where(geoms[:, 0] == self._ball_geom, geoms[:, 1], geoms[:, 0])
+        return int(np.isin(other[with_ball], self._arm_geoms).sum())
+
+    def _reward(self, throws: int) -> float:
+        if self.reward_kind == "throws":
+            return float(throws)
+        if self.reward_kind == "distance":
+            ball = self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
+            distance = np.linalg.norm(ball - self.data.site_xpos[self._cup_site])
+            return float(min(1.0, DISTANCE_SCALE / max(distance, 1e-9)))
+        return float(self._ball_arm_contacts())
+
+    def _get_obs(self) -> np.ndarray:
+        d = self.data
+        return np.concatenate(
+            [
+                d.qpos[self._arm_qpos[:3]],
+                d.qvel[self._arm_qvel],
+                d.qpos[self._ball_qpos : self._ball_qpos + 3],
+                d.qvel[self._ball_qvel : self._ball_qvel + 3],
+                d.site_xpos[self._cup_site],
+                self._cup_velocity(),
+            ]
+        )
+
+    def _info(self) -> dict:
+        return {
+            "throws": self._events.throws,
+            "catches": self._events.catches,
+            "max_consecutive_catches": self._events.max_streak,
+            "ball_height": self._ball_height(),
+            "in_cup": bool(self._in_cup),
+            "peak_joint_speed": self._peak_joint_speed.copy(),
+            "time": float(self.data.time),
+            "physics_error": self._physics_error,
+        }
