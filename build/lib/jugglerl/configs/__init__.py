@@ -1,1 +1,0 @@
-"""Hydra configs and command files, installed as package data of ``jugglerl.configs``."""

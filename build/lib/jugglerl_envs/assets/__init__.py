@@ -1,1 +1,0 @@
-"""MJCF scene files, installed as package data of ``jugglerl_envs.assets``."""
