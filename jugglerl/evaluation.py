@@ -48,6 +48,18 @@ class EpisodeMetrics:
     def to_dict(self) -> dict:
         return asdict(self)
 
+    def scalars(self) -> dict[str, float]:
+        """The numeric metrics, for loggers; ``time_to_drop`` only when the ball was dropped."""
+        values = {
+            "throws": self.throws,
+            "catches": self.catches,
+            "max_consecutive_catches": self.max_consecutive_catches,
+            "duration": self.duration,
+        }
+        if self.time_to_drop is not None:
+            values["time_to_drop"] = self.time_to_drop
+        return {key: float(value) for key, value in values.items()}
+
 
 def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> EpisodeMetrics:
     """Reset ``env`` with ``seed`` and step ``policy`` until the episode ends."""

@@ -1,8 +1,9 @@
-"""Evaluate a policy for one episode and write ``metrics.json`` into the run directory.
+"""Evaluate a policy for one episode: ``metrics.json`` and ``episode.rrd`` in the run directory.
 
 python scripts/evaluate.py policy=expert
 python scripts/evaluate.py policy=path/to/command.yaml env=earth seed=3 duration=60
 python scripts/evaluate.py policy=expert hydra.run.dir=outputs/my_eval
+rerun outputs/my_eval/episode.rrd      # watch it: 3D scene, ball height, throws
 """
 
 from __future__ import annotations
@@ -18,23 +19,41 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode
 from jugglerl.policies import load_policy
+from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.episode import EpisodeRecorder
+from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.names import EVAL
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="evaluate")
 def main(cfg: DictConfig) -> None:
+    run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:
         env = make_juggle_env(cfg.env, duration=cfg.duration)
         policy = load_policy(str(cfg.policy), env)
     except ValueError as error:
         sys.exit(f"error: {error}")
-    metrics = run_episode(env, policy, seed=int(cfg.seed)).to_dict()
-    env.close()
-    run_dir = Path(HydraConfig.get().runtime.output_dir)
-    (run_dir / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
-    print(json.dumps(metrics, indent=2))
+
+    with RerunLogger.from_config(cfg.logger, run_dir) as logger:
+        logger.log_hparams(cfg)
+        logger.send_blueprint(juggling_blueprint(metric_groups=[EVAL]))
+        try:
+            recorder = EpisodeRecorder(env, logger.recording, scene_fps=cfg.logger.scene_fps)
+        except ValueError as error:
+            sys.exit(f"error: logger.{error}")
+        try:
+            metrics = run_episode(recorder, policy, seed=int(cfg.seed))
+        except KeyboardInterrupt:
+            sys.exit(f"interrupted: the episode so far is in {logger.path}")
+        finally:
+            recorder.close()  # sends what is buffered, closes the env
+        logger.log_metrics({f"{EVAL}/{key}": value for key, value in metrics.scalars().items()}, 0)
+
+    (run_dir / "metrics.json").write_text(json.dumps(metrics.to_dict(), indent=2) + "\n")
+    print(json.dumps(metrics.to_dict(), indent=2))
     print(
-        f"policy {cfg.policy}: {metrics['throws']} throws in {metrics['duration']:g} s"
-        f" -> {run_dir / 'metrics.json'}"
+        f"policy {cfg.policy}: {metrics.throws} throws in {metrics.duration:g} s"
+        f" -> {run_dir / 'metrics.json'}, {logger.path}"
     )
 
 

@@ -1,0 +1,13 @@
+"""Everything a run records goes into one rerun recording (``.rrd``): metrics, episodes, layout.
+
+- ``logger.RerunLogger``: TorchRL ``Logger`` over a ``rerun.RecordingStream`` (scalars, histograms,
+  hyper-parameters); owns the file and closes it cleanly.
+- ``episode.EpisodeRecorder``: a Gymnasium wrapper that records episodes of the juggling env in 3D
+  on a ``sim_time`` timeline, with the ball-height plot and a marker per counted throw.
+- ``geometry``: the scene's primitive geoms as rerun archetypes, and body poses per frame.
+- ``blueprint``: the default viewer layout.
+
+Entity paths: ``world/...`` (scene, the ball at ``world/ball``), ``plots/...`` (ball height),
+``train/...``, ``eval/...``, ``dps/...`` (metrics). The episode recorder and the blueprint do not
+import torch; ``logger`` does (through TorchRL).
+"""

@@ -1,0 +1,172 @@
+"""Recordings read back with rerun's own reader: the logger, the episode recorder, evaluate.py."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rrd_reading import column, entities, timelines
+from test_evaluate_script import run_evaluate
+
+from jugglerl.commands import load_command
+from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.recording.episode import EpisodeRecorder
+from jugglerl.recording.logger import RerunLogger
+from jugglerl_envs import JuggleEnv
+from jugglerl_envs.events import count_throws
+
+RERUN_CLI = Path(sys.executable).parent / "rerun"
+
+
+def verify(path: Path) -> None:
+    """rerun's own check that the file is complete and decodes."""
+    result = subprocess.run([str(RERUN_CLI), "rrd", "verify", str(path)], capture_output=True)
+    assert result.returncode == 0, result.stderr.decode()
+
+
+# --- RerunLogger ---------------------------------------------------------------------------
+@pytest.mark.parametrize("flush_every", [0.0, 60.0])  # a send per value, or one at shutdown
+def test_scalars_of_a_training_loop_are_all_there_with_their_steps(tmp_path, flush_every):
+    steps = list(range(0, 2000, 100))
+    with RerunLogger("train", tmp_path, flush_every=flush_every) as logger:
+        logger.log_hparams({"optim": {"lr": 0.001}, "seed": 3})
+        for step in steps:
+            logger.log_metrics({"train/return": step / 10, "train/loss": 1 / (1 + step)}, step)
+        logger.log_scalar("eval/throws", 12, step=1900)
+        logger.log_histogram("train/actions", np.linspace(-1, 1, 101), step=1900, bins=4)
+    verify(logger.path)
+    times, values = column(logger.path, "train/return", "Scalars:scalars", "step")
+    assert times.tolist() == steps and values.tolist() == [s / 10 for s in steps]
+    times, values = column(logger.path, "train/loss", "Scalars:scalars", "step")
+    assert times.tolist() == steps and np.allclose(values, [1 / (1 + s) for s in steps])
+    assert column(logger.path, "eval/throws", "Scalars:scalars", "step")[1].tolist() == [12.0]
+    times, bars = column(logger.path, "train/actions", "BarChart:values", "step")
+    assert times.tolist() == [1900] and sum(bars[0]["buffer"]) == 101  # all samples binned
+    text = column(logger.path, "hparams", "TextDocument:text")[1][0]
+    assert "lr: 0.001" in text and "seed: 3" in text
+
+
+def test_scalars_without_a_step_take_the_last_one(tmp_path):
+    with RerunLogger("train", tmp_path) as logger:
+        logger.log_scalar("train/a", 1.0, step=7)
+        logger.log_scalar("train/b", 2.0)
+    assert column(logger.path, "train/b", "Scalars:scalars", "step")[0].tolist() == [7]
+
+
+@pytest.mark.parametrize("interruption", [RuntimeError, KeyboardInterrupt])
+def test_a_run_interrupted_by_an_exception_leaves_a_readable_file(tmp_path, interruption):
+    logger = RerunLogger("train", tmp_path, flush_every=60.0)
+    with pytest.raises(interruption), logger:
+        logger.log_scalar("train/return", 5.0, step=10)
+        raise interruption()
+    verify(logger.path)
+    assert column(logger.path, "train/return", "Scalars:scalars", "step")[1].tolist() == [5.0]
+
+
+def test_a_crashed_script_without_a_with_block_still_closes_its_file(tmp_path):
+    script = (
+        "from jugglerl.recording.logger import RerunLogger\n"
+        f"logger = RerunLogger('train', {str(tmp_path)!r}, flush_every=60.0)\n"
+        "logger.log_scalar('train/return', 5.0, step=10)\n"
+        "logger.flush()\n"
+        "raise SystemExit('crash')\n"
+    )
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert result.returncode != 0 and "crash" in result.stderr
+    verify(tmp_path / "train.rrd")
+    assert column(tmp_path / "train.rrd", "train/return", "Scalars:scalars", "step")[1] == [5.0]
+
+
+def test_an_existing_recording_is_never_overwritten(tmp_path):
+    for _ in range(2):
+        with RerunLogger("episode", tmp_path) as logger:
+            logger.log_scalar("eval/throws", 1.0, step=0)
+    assert sorted(p.name for p in tmp_path.glob("*.rrd")) == ["episode.1.rrd", "episode.rrd"]
+
+
+def test_video_frames_are_logged_as_images(tmp_path):
+    video = np.zeros((3, 3, 8, 6), dtype=np.uint8)  # [T, C, H, W]
+    with RerunLogger("train", tmp_path) as logger:
+        logger.log_video("eval/video", video, step=4)
+    times, _ = column(logger.path, "eval/video", "Image:buffer", "video_frame")
+    assert times.tolist() == [0, 1, 2]
+    assert column(logger.path, "eval/video", "Image:format", "step")[0].tolist() == [4] * 3
+
+
+# --- EpisodeRecorder -----------------------------------------------------------------------
+def record_expert(tmp_path: Path, duration: float, scene_fps: float = 50.0, root: str = ""):
+    """Record the expert; return the logger path, the metrics and the true ball trajectory."""
+    env = JuggleEnv(duration=duration)
+    trajectory = []
+
+    class Tracing(CommandPolicy):
+        def act(self, observation, time):
+            trajectory.append((time, *observation[6:9]))
+            return super().act(observation, time)
+
+    with RerunLogger("episode", tmp_path) as logger:
+        recorder = EpisodeRecorder(env, logger.recording, root=root, scene_fps=scene_fps)
+        metrics = run_episode(recorder, Tracing(load_command("expert"), env), seed=0)
+    return logger.path, metrics, np.array(trajectory)
+
+
+def test_an_episode_recording_holds_the_scene_and_the_plots(tmp_path):
+    path, _, _ = record_expert(tmp_path, duration=4.0)
+    verify(path)
+    names = entities(path)
+    assert {"world/ball", "plots/ball_height", "plots/threshold", "world/threshold"} <= names
+    model = JuggleEnv().model
+    geoms = {model.geom(g).name for g in range(model.ngeom)}
+    assert geoms == {name.rsplit("/", 1)[-1] for name in names if name.rsplit("/", 1)[-1] in geoms}
+    cup = [name for name in names if name.endswith("/cup")]
+    assert cup == [
+        "world/base/shoulder_link/upper_arm_link/forearm_link/wrist_1_link/"
+        "wrist_2_link/wrist_3_link/cup"
+    ]  # paths mirror the body tree
+    assert "sim_time" in timelines(path)
+
+
+def test_logged_ball_positions_match_the_simulated_trajectory(tmp_path):
+    path, metrics, trajectory = record_expert(tmp_path, duration=6.0)
+    times, positions = column(path, "world/ball", "Transform3D:translation", "sim_time")
+    # every env step is a frame at 50 Hz; the policy saw each state before acting on it
+    assert len(times) == len(trajectory) + 1  # + the last state, which no policy sees
+    assert np.allclose(times[:-1], trajectory[:, 0], atol=1e-9)
+    assert np.allclose(positions[:-1], trajectory[:, 1:], atol=1e-6)  # float32
+
+
+def test_scene_frames_follow_scene_fps_not_the_physics(tmp_path):
+    path, _, _ = record_expert(tmp_path, duration=4.0, scene_fps=10.0)
+    frame_times, _ = column(path, "world/ball", "Transform3D:translation", "sim_time")
+    assert np.allclose(frame_times, np.arange(41) * 0.1)
+    heights_at, _ = column(path, "plots/ball_height", "Scalars:scalars", "sim_time")
+    assert len(heights_at) == 201  # the height stays at the env's 50 Hz
+
+
+def test_throw_markers_and_heights_agree_with_the_env(tmp_path):
+    path, metrics, _ = record_expert(tmp_path, duration=12.0, root="eval/episodes/0001")
+    _, heights = column(path, "eval/episodes/0001/plots/ball_height", "Scalars:scalars", "sim_time")
+    crossings = count_throws(heights, np.ones_like(heights, dtype=bool), threshold=1.0)
+    marker_times, marker_heights = column(
+        path, "eval/episodes/0001/plots/throws", "Scalars:scalars", "sim_time"
+    )
+    assert metrics.throws >= 3
+    assert crossings == len(marker_times) == metrics.throws
+    assert (marker_heights >= 1.0).all()
+
+
+# --- evaluate.py ---------------------------------------------------------------------------
+def test_evaluate_records_the_episode_it_runs(tmp_path):
+    result = run_evaluate("policy=expert", "duration=12", f"hydra.run.dir={tmp_path}")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    path = tmp_path / "episode.rrd"
+    verify(path)
+    _, heights = column(path, "plots/ball_height", "Scalars:scalars", "sim_time")
+    assert count_throws(heights, np.ones_like(heights, dtype=bool), 1.0) == metrics["throws"]
+    assert column(path, "eval/throws", "Scalars:scalars", "step")[1].tolist() == [metrics["throws"]]
+    from rerun.chunk import RrdReader
+
+    assert RrdReader(path).blueprints(), "no default layout was sent"
