@@ -1,23 +1,28 @@
 """Recordings read back with rerun's own reader: the logger, the episode recorder, evaluate.py."""
 
 import json
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
+import imageio.v3 as iio
 import numpy as np
 import pytest
-from rrd_reading import column, entities, timelines
+from rerun.chunk import RrdReader
 from test_evaluate_script import run_evaluate
 
 from jugglerl.commands import load_command
 from jugglerl.evaluation import CommandPolicy, run_episode
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.reading import column, entities, timelines
 from jugglerl_envs import JuggleEnv
 from jugglerl_envs.events import count_throws
 
 RERUN_CLI = Path(sys.executable).parent / "rerun"
+SCALAR = ("Scalars:scalars", "step")
 
 
 def verify(path: Path) -> None:
@@ -95,6 +100,43 @@ def test_video_frames_are_logged_as_images(tmp_path):
     assert column(logger.path, "eval/video", "Image:format", "step")[0].tolist() == [4] * 3
 
 
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def listening(port: int) -> bool:
+    with socket.socket() as probe:
+        return probe.connect_ex(("127.0.0.1", port)) == 0
+
+
+def test_live_url_also_streams_to_a_running_viewer_server(tmp_path):
+    port = free_port()
+    received = tmp_path / "received.rrd"
+    server = subprocess.Popen(
+        [str(RERUN_CLI), "--port", str(port), "--save", str(received)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 20
+        while not listening(port):
+            assert time.monotonic() < deadline, "the rerun server did not start"
+            time.sleep(0.1)
+        url = f"rerun+http://127.0.0.1:{port}/proxy"
+        with RerunLogger("train", tmp_path / "run", live_url=url) as logger:
+            logger.log_scalar("train/return", 7.0, step=3)
+        while not received.exists() or not len(column(received, "train/return", *SCALAR)[0]):
+            assert time.monotonic() < deadline, "nothing reached the live server"
+            time.sleep(0.1)
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
+    assert column(received, "train/return", *SCALAR)[1].tolist() == [7.0]
+    assert column(logger.path, "train/return", *SCALAR)[1].tolist() == [7.0]  # and the file
+
+
 # --- EpisodeRecorder -----------------------------------------------------------------------
 def record_expert(tmp_path: Path, duration: float, scene_fps: float = 50.0, root: str = ""):
     """Record the expert; return the logger path, the metrics and the true ball trajectory."""
@@ -167,6 +209,21 @@ def test_evaluate_records_the_episode_it_runs(tmp_path):
     _, heights = column(path, "plots/ball_height", "Scalars:scalars", "sim_time")
     assert count_throws(heights, np.ones_like(heights, dtype=bool), 1.0) == metrics["throws"]
     assert column(path, "eval/throws", "Scalars:scalars", "step")[1].tolist() == [metrics["throws"]]
-    from rerun.chunk import RrdReader
-
     assert RrdReader(path).blueprints(), "no default layout was sent"
+
+
+def test_plot_recording_draws_the_ball_height_from_a_file(tmp_path):
+    path, metrics, _ = record_expert(tmp_path, duration=8.0)
+    out = tmp_path / "plot.png"
+    script = Path(__file__).resolve().parents[1] / "scripts" / "plot_recording.py"
+    result = subprocess.run(
+        [sys.executable, str(script), str(path), "--out", str(out), "--seconds", "8"],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stderr
+    assert f"401 heights, {metrics.throws} throws" in result.stdout
+    image = iio.imread(out)
+    assert image.shape == (300, 900, 3)
+    red = (image == [230, 60, 60]).all(axis=-1)  # the height line is drawn
+    assert red.sum() > 500

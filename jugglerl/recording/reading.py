@@ -1,4 +1,7 @@
-"""Read rerun recordings back with rerun's own reader, for assertions on what was logged."""
+"""Read JuggleRL recordings back with rerun's own reader (no viewer needed).
+
+Used by the tests to check what was logged, and by ``scripts/plot_recording.py``.
+"""
 
 from __future__ import annotations
 
