@@ -179,6 +179,19 @@ def test_logged_ball_positions_match_the_simulated_trajectory(tmp_path):
     assert np.allclose(positions[:-1], trajectory[:, 1:], atol=1e-6)  # float32
 
 
+def test_an_abandoned_episode_keeps_what_was_recorded(tmp_path, hold):
+    """Ctrl-C in evaluate.py closes the recorder mid-episode: the samples so far are sent."""
+    env = JuggleEnv()
+    with RerunLogger("episode", tmp_path) as logger:
+        recorder = EpisodeRecorder(env, logger.recording)
+        recorder.reset(seed=0)
+        for _ in range(30):
+            recorder.step(hold(env))
+        recorder.close()
+    times, _ = column(logger.path, "plots/ball_height", "Scalars:scalars", "sim_time")
+    assert len(times) == 31 and times[-1] == pytest.approx(0.6)
+
+
 def test_scene_frames_follow_scene_fps_not_the_physics(tmp_path):
     path, _, _ = record_expert(tmp_path, duration=4.0, scene_fps=10.0)
     frame_times, _ = column(path, "world/ball", "Transform3D:translation", "sim_time")

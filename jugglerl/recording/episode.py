@@ -16,6 +16,7 @@ from jugglerl.recording.geometry import (
     relative_poses,
 )
 from jugglerl.recording.names import PLOTS, SIM_TIME, WORLD, join
+from jugglerl_envs.scene import CUP_SITE
 
 THRESHOLD_COLOUR = [40, 160, 255]
 THROW_COLOUR = [255, 200, 0]
@@ -56,6 +57,7 @@ class EpisodeRecorder(gym.Wrapper):
         self._data = juggle.data
         self._kinematics = mujoco.MjData(self._model)  # scratch: poses at the current state
         self._threshold = juggle.threshold
+        self._cup_site = self._model.site(CUP_SITE).id
         self._moving = moving_bodies(self._model)
         self._roots_with_scene: set[str] = set()
         self._recording = False
@@ -112,10 +114,13 @@ class EpisodeRecorder(gym.Wrapper):
         )
 
     def _log_threshold_square(self, half_width: float = 0.6) -> None:
-        """The threshold plane as a square outline centred above the robot's base."""
-        h = self._threshold
+        """The threshold plane as a square outline, centred over the cup's start position."""
+        centre_x, centre_y = self._data.site_xpos[self._cup_site, :2]
         corners = [[-1, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]]
-        outline = [[half_width * x - half_width, half_width * y, h] for x, y in corners]
+        outline = [
+            [centre_x + half_width * x, centre_y + half_width * y, self._threshold]
+            for x, y in corners
+        ]
         self.stream.log(
             join(self._world, "threshold"),
             rr.LineStrips3D([outline], colors=[THRESHOLD_COLOUR], radii=[0.003]),
