@@ -62,13 +62,17 @@ class ViaPointCommand:
                 f" within [0, cycle={self.cycle})"
             )
 
-    def setpoints(self, time: float) -> np.ndarray:
-        """Setpoints (pan, lift, elbow) in radians at ``time`` seconds after the command starts."""
-        phase = time % self.cycle
-        times = [t for t, _, _ in self.via_points]
-        index = int(np.searchsorted(times, phase, side="right")) - 1  # -1 wraps to the last point
-        _, lift, elbow = self.via_points[index]
-        return np.array([self.pan, lift, elbow])
+    def setpoints(self, time: float | np.ndarray) -> np.ndarray:
+        """Setpoints (pan, lift, elbow) in radians at ``time`` seconds after the command starts.
+
+        ``time`` may be an array of times: the result then has one row of 3 per time.
+        """
+        points = np.asarray(self.via_points)
+        phase = np.mod(time, self.cycle)
+        index = np.searchsorted(points[:, 0], phase, side="right") - 1  # -1 wraps to the last
+        lift_elbow = points[index, 1:]
+        pan = np.full(np.shape(phase) + (1,), self.pan)
+        return np.concatenate([pan, lift_elbow], axis=-1)
 
     def to_dict(self) -> dict:
         return {
