@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 
@@ -67,12 +68,19 @@ class ViaPointCommand:
 
         ``time`` may be an array of times: the result then has one row of 3 per time.
         """
-        points = np.asarray(self.via_points)
         phase = np.mod(time, self.cycle)
-        index = np.searchsorted(points[:, 0], phase, side="right") - 1  # -1 wraps to the last
-        lift_elbow = points[index, 1:]
+        index = np.searchsorted(self._times, phase, side="right") - 1  # -1 wraps to the last
+        lift_elbow = self._angles[index]
         pan = np.full(np.shape(phase) + (1,), self.pan)
         return np.concatenate([pan, lift_elbow], axis=-1)
+
+    @cached_property
+    def _times(self) -> np.ndarray:
+        return np.array([t for t, _, _ in self.via_points])
+
+    @cached_property
+    def _angles(self) -> np.ndarray:
+        return np.array([(lift, elbow) for _, lift, elbow in self.via_points])
 
     def to_dict(self) -> dict:
         return {
