@@ -23,6 +23,7 @@ import numpy as np
 from mujoco import rollout
 
 from jugglerl.commands import ViaPointCommand
+from jugglerl_envs import scene
 from jugglerl_envs.events import count_throws
 from jugglerl_envs.juggle import DROP_HEIGHT, JuggleEnv
 
@@ -56,8 +57,10 @@ class CommandRollouts:
         self._physics_times = self._times_before_each_physics_step()
         self._datas = [mujoco.MjData(self.env.model) for _ in range(self.nthread)]
         self._pool = rollout.Rollout(nthread=self.nthread)
-        self._ball_z = 1 + self.env._ball_qpos + 2  # the state starts with time, then qpos
-        self._contact = self.env._contact_sensor
+        model = self.env.model
+        ball_qpos = model.jnt_qposadr[model.body(scene.BALL_BODY).jntadr[0]]
+        self._ball_z = 1 + ball_qpos + 2  # the state is (time, qpos, qvel, ...)
+        self._contact = model.sensor_adr[model.sensor(scene.BALL_CONTACT_SENSOR).id]
 
     def _times_before_each_physics_step(self) -> np.ndarray:
         """``data.time`` before each physics step, summed step by step as MuJoCo does."""

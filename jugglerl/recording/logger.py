@@ -39,7 +39,8 @@ class RerunLogger(Logger):
         log_dir: folder of the recording (created if missing).
         live_url: also stream to a running viewer at this gRPC url
             (``rerun+http://127.0.0.1:9876/proxy`` is the viewer's default); ``None``: file only.
-        recording_id: rerun recording id; a fresh one when ``None``.
+        recording_id: rerun recording id; a fresh one when ``None``. To continue a run's
+            recording after a resume, pass the id saved in ``state_dict()["local"]``.
         flush_every: seconds between automatic sends of buffered scalars.
     """
 
