@@ -54,7 +54,7 @@ class CommandRollouts:
         self.nthread = nthread or os.cpu_count() or 1
         self.frame_skip = self.env.frame_skip
         self.n_env_steps = max(1, round(self.env.duration / self.env.dt))
-        self._physics_times = self._times_before_each_physics_step()
+        self._env_step_times = self._times_before_each_env_step()
         self._datas = [mujoco.MjData(self.env.model) for _ in range(self.nthread)]
         self._pool = rollout.Rollout(nthread=self.nthread)
         model = self.env.model
@@ -62,21 +62,22 @@ class CommandRollouts:
         self._ball_z = 1 + ball_qpos + 2  # the state is (time, qpos, qvel, ...)
         self._contact = model.sensor_adr[model.sensor(scene.BALL_CONTACT_SENSOR).id]
 
-    def _times_before_each_physics_step(self) -> np.ndarray:
-        """``data.time`` before each physics step, summed step by step as MuJoCo does."""
+    def _times_before_each_env_step(self) -> np.ndarray:
+        """``data.time`` when each env step starts, summed physics step by physics step as MuJoCo
+        does (a product ``k * dt`` differs in the last bits, and the commands are chaotic)."""
         steps = self.n_env_steps * self.frame_skip
         timestep = self.env.model.opt.timestep
-        return np.concatenate([[0.0], np.cumsum(np.full(steps - 1, timestep))])
+        physics_times = np.concatenate([[0.0], np.cumsum(np.full(steps - 1, timestep))])
+        return physics_times[:: self.frame_skip]
 
     # --- controls -------------------------------------------------------------------------
     def controls(self, commands: Sequence[ViaPointCommand]) -> np.ndarray:
         """The ``[command, physics step, nu]`` controls the env would apply for each command."""
         env = self.env
-        env_step_times = self._physics_times[:: self.frame_skip]
         # the policy hands the env a float32 action; the env maps it back to radians
         targets = np.stack(
             [
-                env.action_to_ctrl(env.ctrl_to_action(command.setpoints(env_step_times)))
+                env.action_to_ctrl(env.ctrl_to_action(command.setpoints(self._env_step_times)))
                 for command in commands
             ]
         )
@@ -142,9 +143,8 @@ class CommandRollouts:
         dropped = ended.any(axis=1)
         last = np.where(dropped, ended.argmax(axis=1), heights.shape[1] - 1)
         counted = np.arange(heights.shape[1]) <= last[:, None]
-        throws = count_throws(
-            np.where(counted, heights, 0.0), in_flight & counted, self.env.threshold
-        )
+        # a crossing completes at its later sample: masking that sample's flag drops it
+        throws = count_throws(heights, in_flight & counted, self.env.threshold)
         time_to_drop = np.where(dropped, last * self.env.dt, np.nan)
         return throws, time_to_drop
 
