@@ -2,7 +2,7 @@
 
     python scripts/bench_dps.py [--commands 16] [--duration 120] [--threads 2] [--repeats 3]
 
-Samples commands around the expert (times ±0.02 s, angles ±0.02 rad, cycle ±0.05 s), then times,
+Samples commands around the expert from DPS's search distribution (the paper's stds), then times,
 on the same model, start states, controls and thread count:
 - bare: one ``mujoco.rollout`` call on precomputed controls, nothing else;
 - ours: ``CommandRollouts.evaluate`` (controls built, roll-outs, throws counted).
@@ -20,20 +20,11 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from jugglerl.commands import ViaPointCommand, load_command
+from jugglerl.commands import load_command
+from jugglerl.dps.distribution import sample_commands
+from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl_envs import JuggleEnv
-
-
-def sample_commands(count: int, seed: int) -> list[ViaPointCommand]:
-    expert = load_command("expert")
-    rng = np.random.default_rng(seed)
-    points = np.array(expert.via_points)
-    stds = np.array([0.02, 0.02, 0.02])
-    samples = points + rng.normal(size=(count, *points.shape)) * stds
-    samples[:, 0, 0] = 0.0  # the first via-point opens the cycle
-    cycles = expert.cycle + 0.05 * rng.normal(size=count)
-    return [ViaPointCommand(c, tuple(map(tuple, p))) for c, p in zip(cycles, samples, strict=True)]
 
 
 def main() -> None:
@@ -45,7 +36,8 @@ def main() -> None:
     args = parser.parse_args()
 
     env = JuggleEnv(duration=args.duration)
-    commands = sample_commands(args.commands, seed=0)
+    constraints = ViaPointConstraints.from_model(env.model, 1.0, 5.0, 0.1)
+    commands = sample_commands(load_command("expert"), args.commands, constraints, seed=0)
     with CommandRollouts(env, nthread=args.threads) as ours:
         state, warmstart = ours.start_state(seed=0)
         controls = ours.controls(commands)

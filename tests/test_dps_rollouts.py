@@ -8,28 +8,22 @@ import numpy as np
 import pytest
 
 from jugglerl.commands import ViaPointCommand, load_command
+from jugglerl.dps.distribution import sample_commands
+from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.evaluation import CommandPolicy, run_episode
 from jugglerl_envs import JuggleEnv
 
 
-def perturbed_experts(count: int, seed: int = 1) -> list[ViaPointCommand]:
-    """The expert with its cycle, times and angles jittered (as DPS samples them)."""
-    expert = load_command("expert")
-    rng = np.random.default_rng(seed)
-    commands = []
-    for _ in range(count):
-        points = np.array(expert.via_points)
-        points[:, 1:] += rng.normal(0.0, 0.02, points[:, 1:].shape)
-        points[1:, 0] += rng.normal(0.0, 0.02, len(points) - 1)
-        cycle = expert.cycle + rng.normal(0.0, 0.05)
-        commands.append(ViaPointCommand(cycle, tuple(map(tuple, points))))
-    return commands
+def perturbed_experts(env: JuggleEnv, count: int) -> list[ViaPointCommand]:
+    """Samples around the expert from DPS's search distribution (the paper's stds)."""
+    constraints = ViaPointConstraints.from_model(env.model, 1.0, 5.0, 0.1)
+    return sample_commands(load_command("expert"), count, constraints, seed=1)
 
 
 def test_batched_throws_and_drops_equal_the_envs():
     env = JuggleEnv(duration=20.0, reset_noise=0.01)
-    commands = [load_command("expert"), *perturbed_experts(9)]
+    commands = [load_command("expert"), *perturbed_experts(env, 9)]
     seeds = list(range(len(commands)))
     with CommandRollouts(env, nthread=2) as rollouts:
         results = rollouts.evaluate(commands, seeds)
@@ -61,9 +55,11 @@ def test_rate_limited_controls_are_the_setpoints_the_env_applies():
 
 
 def test_one_seed_per_command():
-    rollouts = CommandRollouts(JuggleEnv(duration=1.0), nthread=1)
+    env = JuggleEnv(duration=1.0)
+    commands = perturbed_experts(env, 3)
+    rollouts = CommandRollouts(env, nthread=1)
     with rollouts, pytest.raises(ValueError, match="2 seeds for 3 commands"):
-        rollouts.evaluate(perturbed_experts(3), seeds=[0, 1])
+        rollouts.evaluate(commands, seeds=[0, 1])
 
 
 def test_bench_dps_prints_the_ratio_last():

@@ -1,0 +1,147 @@
+"""``DPSCollector``: Direct Policy Search as a TorchRL collector.
+
+Each iteration samples ``frames_per_batch`` parameter vectors θ from the current search
+distribution, rolls their commands out at raw physics speed (``CommandRollouts``) and yields a
+``[frames_per_batch]`` TensorDict:
+
+=====================  ==========  =====================================================
+key                    dtype       meaning
+=====================  ==========  =====================================================
+``params``             float64     θ ``[1 + 3p]`` (layout in ``jugglerl.dps.params``)
+``return``             float64     throws in the roll-out (the paper's reward)
+``throws``             int64       same, as a count
+``time_to_drop``       float64     s until the ball fell below the drop height; NaN: never
+``seed``               int64       the env reset seed of the roll-out
+``collector/iteration`` int64      index of the batch
+=====================  ==========  =====================================================
+
+A "frame" here is one roll-out (one whole episode): ``total_frames`` is the roll-out budget.
+The learner refits the distribution from the batch and hands it back with
+``update_policy_weights_(distribution.to_tensordict())``; the next batch samples from it.
+``state_dict`` holds the distribution, the sampling RNG and the counters, so a run restored with
+``load_state_dict`` draws exactly the samples the uninterrupted run would have drawn.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Iterator
+
+import torch
+from tensordict import TensorDict, TensorDictBase
+from torchrl.collectors import BaseCollector
+
+from jugglerl.dps.distribution import SearchDistribution
+from jugglerl.dps.params import ViaPointConstraints, params_to_command
+from jugglerl.dps.rollouts import CommandRollouts
+
+#: Reset seeds of roll-outs are drawn below this bound (they matter when the env has reset noise).
+SEED_BOUND = 2**31 - 1
+
+
+class DPSCollector(BaseCollector):
+    """Samples commands from a search distribution and rolls them out, batch after batch.
+
+    Args:
+        rollouts: evaluates commands (owns the env and the thread pool; closed by ``shutdown``).
+        distribution: the starting search distribution.
+        constraints: projection of samples onto valid commands.
+        frames_per_batch: roll-outs per iteration (the paper's N).
+        total_frames: roll-out budget; ``-1`` runs until stopped.
+        pan: pan angle of every command (not searched), rad.
+        seed: seeds the sampling RNG.
+    """
+
+    def __init__(
+        self,
+        rollouts: CommandRollouts,
+        distribution: SearchDistribution,
+        constraints: ViaPointConstraints,
+        *,
+        frames_per_batch: int,
+        total_frames: int = -1,
+        pan: float = 0.0,
+        seed: int = 0,
+    ):
+        super().__init__()
+        if frames_per_batch < 1:
+            raise ValueError("frames_per_batch (roll-outs per batch) must be >= 1")
+        self.rollouts = rollouts
+        self.distribution = distribution
+        self.constraints = constraints
+        self.frames_per_batch = self.requested_frames_per_batch = frames_per_batch
+        self.total_frames = total_frames
+        self.pan = pan
+        self.generator = torch.Generator()
+        self.set_seed(seed)
+        self.iteration = 0
+        self.frames = 0
+
+    def iterator(self) -> Iterator[TensorDictBase]:
+        while self.total_frames < 0 or self.frames < self.total_frames:
+            yield self.collect_batch()
+
+    def collect_batch(self) -> TensorDict:
+        """Sample, roll out and count one batch."""
+        count = self.frames_per_batch
+        if self.total_frames >= 0:
+            count = min(count, self.total_frames - self.frames)
+        params = self.distribution.sample(count, self.generator, self.constraints)
+        seeds = torch.randint(SEED_BOUND, (count,), generator=self.generator)
+        commands = [params_to_command(theta, self.pan) for theta in params]
+        results = self.rollouts.evaluate(commands, seeds.tolist())
+        throws = torch.as_tensor(results.throws, dtype=torch.int64)
+        batch = TensorDict(
+            {
+                "params": params,
+                "return": throws.to(torch.float64),
+                "throws": throws,
+                "time_to_drop": torch.as_tensor(results.time_to_drop, dtype=torch.float64),
+                "seed": seeds,
+                ("collector", "iteration"): torch.full((count,), self.iteration),
+            },
+            batch_size=[count],
+        )
+        self.iteration += 1
+        self.frames += count
+        return batch
+
+    def update_policy_weights_(self, policy_or_weights=None, *, weights=None, **kwargs) -> None:
+        """Replace the search distribution: a ``SearchDistribution`` or its TensorDict
+        (``mean``, ``cov``)."""
+        new = weights if weights is not None else policy_or_weights
+        if isinstance(new, TensorDictBase):
+            new = SearchDistribution.from_tensordict(new)
+        if not isinstance(new, SearchDistribution):
+            raise TypeError(f"expected a SearchDistribution or its TensorDict, got {type(new)}")
+        self.distribution = new
+
+    def set_seed(self, seed: int, static_seed: bool = False) -> int:
+        self.generator.manual_seed(seed)
+        return seed
+
+    def state_dict(self) -> OrderedDict:
+        return OrderedDict(
+            distribution=self.distribution.to_tensordict().to_dict(),
+            generator=self.generator.get_state(),
+            iteration=self.iteration,
+            frames=self.frames,
+        )
+
+    def load_state_dict(self, state_dict: OrderedDict) -> None:
+        self.distribution = SearchDistribution.from_tensordict(
+            TensorDict(state_dict["distribution"])
+        )
+        self.generator.set_state(state_dict["generator"])
+        self.iteration = int(state_dict["iteration"])
+        self.frames = int(state_dict["frames"])
+
+    def shutdown(self, timeout=None, close_env: bool = True, raise_on_error: bool = True) -> None:
+        if close_env:
+            self.rollouts.close()
+
+    def __repr__(self) -> str:
+        return (
+            f"DPSCollector(frames_per_batch={self.frames_per_batch},"
+            f" total_frames={self.total_frames}, iteration={self.iteration})"
+        )

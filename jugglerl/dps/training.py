@@ -1,0 +1,276 @@
+"""The DPS training loop: collect a batch, update the distribution, keep the best, log, checkpoint.
+
+``DPSTraining`` is built from the Hydra config (``configs/train.yaml`` with ``algo=dps``) and a run
+directory, where it writes
+
+- ``checkpoint.pt`` after every episode (atomically): collector state (distribution, RNG,
+  counters), update-rule state, best command, history, the config and the logger's recording id;
+- ``best_command.yaml`` whenever the best improves (replay it with
+  ``scripts/evaluate.py policy=<run dir>/best_command.yaml``);
+- ``metrics.json``: the best command's score, roll-outs to reach given throw counts, the history
+  per episode and, at the end, the best command under reset noise.
+
+Metrics go to the rerun logger under ``dps/`` on the ``step`` timeline (roll-outs so far); each
+time the best improves its episode is replayed in the env and recorded under
+``best/<roll-outs>``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+from omegaconf import DictConfig, OmegaConf
+from tqdm import tqdm
+
+from jugglerl.commands import load_command, save_command
+from jugglerl.config import make_juggle_env
+from jugglerl.dps.collector import DPSCollector
+from jugglerl.dps.distribution import SearchDistribution
+from jugglerl.dps.params import (
+    ViaPointConstraints,
+    command_to_params,
+    component_stds,
+    params_to_command,
+)
+from jugglerl.dps.rollouts import CommandRollouts
+from jugglerl.dps.updates import UpdateRule, make_update
+from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.episode import EpisodeRecorder
+from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.names import DPS, join
+
+CHECKPOINT = "checkpoint.pt"
+BEST_COMMAND = "best_command.yaml"
+METRICS = "metrics.json"
+#: Throw counts whose first roll-out is reported: the paper's DPS best, and this project's bar.
+MILESTONES = (39, 60)
+
+
+@dataclass
+class BestCommand:
+    """The best roll-out so far: its θ, throws, reset seed and when it was found (roll-outs)."""
+
+    params: torch.Tensor
+    throws: int = -1
+    seed: int = 0
+    rollout: int = 0
+    time_to_drop: float = math.nan
+    history: list[dict] = field(default_factory=list)
+
+
+class DPSTraining:
+    """One DPS run. ``run()`` trains to ``algo.episodes``; ``load(path)`` resumes a checkpoint."""
+
+    def __init__(self, cfg: DictConfig, run_dir: str | Path):
+        self.cfg = cfg
+        self.run_dir = Path(run_dir)
+        algo = cfg.algo
+        self.env = make_juggle_env(cfg.env)
+        start = load_command(algo.start)
+        self.pan = start.pan
+        self.constraints = ViaPointConstraints.from_model(
+            self.env.unwrapped.model, algo.min_cycle, algo.max_cycle, algo.min_gap
+        )
+        start_params = command_to_params(start)
+        self.constraints.check(len(start.via_points))
+        if self.constraints.violations(start_params):
+            problems = "; ".join(self.constraints.violations(start_params))
+            raise ValueError(f"algo.start={algo.start}: outside the constraints: {problems}")
+        stds = component_stds(len(start.via_points), dict(algo.std))
+        self.update: UpdateRule = make_update(
+            algo["update"],  # item access: DictConfig.update is a method
+            stds,
+            elite=algo.elite,
+            epsilon=algo.epsilon,
+            min_std_scale=algo.min_std_scale,
+        )
+        if algo.episodes < 1 or algo.rollouts < 1:
+            raise ValueError("algo.episodes and algo.rollouts must be >= 1")
+        if algo["update"] == "elite" and not 2 <= algo.elite <= algo.rollouts:
+            raise ValueError(
+                f"algo.elite={algo.elite} must be in [2, algo.rollouts={algo.rollouts}]"
+            )
+        self.collector = DPSCollector(
+            CommandRollouts(self.env, nthread=algo.threads),
+            SearchDistribution.diagonal(start_params, stds),
+            self.constraints,
+            frames_per_batch=algo.rollouts,
+            total_frames=algo.episodes * algo.rollouts,
+            pan=self.pan,
+            seed=cfg.seed,
+        )
+        self.best = BestCommand(start_params)
+        self.recording_id: str | None = None
+
+    # --- the loop -------------------------------------------------------------------------
+    def run(self, logger: RerunLogger, progress: bool = True) -> dict:
+        """Train until the roll-out budget is spent; returns the final metrics."""
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        logger.send_blueprint(juggling_blueprint(metric_groups=[DPS]))
+        bar = tqdm(
+            total=self.cfg.algo.episodes,
+            initial=self.collector.iteration,
+            desc="DPS",
+            unit="episode",
+            disable=not progress,
+        )
+        with bar:
+            for batch in self.collector:
+                improved = self._learn(batch)
+                self._log(logger, self.best.history[-1])
+                if improved:
+                    save_command(self.best_command(), self.run_dir / BEST_COMMAND)
+                    self._record_best(logger)
+                self.save(self.run_dir / CHECKPOINT)
+                bar.set_postfix(best=self.best.throws, mean=f"{batch['return'].mean():.1f}")
+                bar.update()
+        metrics = self.metrics(final=True)
+        (self.run_dir / METRICS).write_text(_json(metrics))
+        return metrics
+
+    def _learn(self, batch) -> bool:
+        """Update the distribution from ``batch``; keep the best roll-out. True if it improved."""
+        distribution = self.update(self.collector.distribution, batch["params"], batch["return"])
+        self.collector.update_policy_weights_(distribution.to_tensordict())
+        first = self.collector.frames - len(batch)
+        index = int(torch.argmax(batch["throws"]))
+        improved = int(batch["throws"][index]) > self.best.throws
+        if improved:
+            self.best.params = batch["params"][index].clone()
+            self.best.throws = int(batch["throws"][index])
+            self.best.seed = int(batch["seed"][index])
+            self.best.rollout = first + index + 1
+            self.best.time_to_drop = float(batch["time_to_drop"][index])
+        self.best.history.append(
+            {
+                "episode": self.collector.iteration,
+                "rollouts": self.collector.frames,
+                "best_throws": self.best.throws,
+                "max_throws": int(batch["throws"].max()),
+                "mean_throws": float(batch["return"].mean()),
+                "dropped": float(torch.isfinite(batch["time_to_drop"]).double().mean()),
+                "mean_cycle": float(distribution.mean[0]),
+                "std_cycle": float(distribution.stds[0]),
+                "first_rollout_with": {
+                    str(n): first + int(torch.nonzero(batch["throws"] >= n)[0]) + 1
+                    for n in MILESTONES
+                    if bool(torch.any(batch["throws"] >= n))
+                },
+            }
+        )
+        return improved
+
+    def _log(self, logger: RerunLogger, record: dict) -> None:
+        step = record["rollouts"]
+        scalars = {key: value for key, value in record.items() if isinstance(value, (int, float))}
+        logger.log_metrics({join(DPS, key): value for key, value in scalars.items()}, step)
+
+    def _record_best(self, logger: RerunLogger) -> None:
+        """Replay the new best command in the env and record it under ``best/<roll-outs>``."""
+        if not self.cfg.record_best:
+            return
+        root = join("best", f"{self.best.rollout:05d}")
+        recorder = EpisodeRecorder(
+            make_juggle_env(self.cfg.env), logger.recording, root, self.cfg.logger.scene_fps
+        )
+        command = self.best_command()
+        run_episode(recorder, CommandPolicy(command, recorder), seed=self.best.seed)
+        recorder.close()
+        logger.send_blueprint(juggling_blueprint(root, metric_groups=[DPS]))
+
+    # --- results --------------------------------------------------------------------------
+    def best_command(self):
+        return params_to_command(self.best.params, self.pan, name=f"dps_best_{self.best.throws}")
+
+    def metrics(self, final: bool = False) -> dict:
+        """Best command, milestones and history; with ``final``, the best under reset noise."""
+        reached = {}
+        for record in self.best.history:
+            for n, rollout in record["first_rollout_with"].items():
+                reached.setdefault(n, rollout)
+        metrics = {
+            "update": self.cfg.algo["update"],
+            "seed": self.cfg.seed,
+            "best_throws": self.best.throws,
+            "best_found_at_rollout": self.best.rollout,
+            "best_time_to_drop": _finite_or_none(self.best.time_to_drop),
+            "rollouts": self.collector.frames,
+            "first_rollout_with": {n: reached.get(str(n)) for n in MILESTONES},
+            "best_command": self.best_command().to_dict(),
+            "history": self.best.history,
+        }
+        if final and self.cfg.algo.noise_check.seeds > 0:
+            metrics["noise_check"] = self.noise_check()
+        return metrics
+
+    def noise_check(self) -> dict:
+        """The best command's throws from ``noise_check.seeds`` starts with ball offset noise."""
+        check = self.cfg.algo.noise_check
+        env = make_juggle_env(self.cfg.env, reset_noise=check.reset_noise)
+        with CommandRollouts(env, nthread=self.cfg.algo.threads) as rollouts:
+            seeds = list(range(check.seeds))
+            throws = rollouts.evaluate([self.best_command()] * len(seeds), seeds).throws
+        return {
+            "reset_noise": check.reset_noise,
+            "seeds": seeds,
+            "throws": throws.tolist(),
+            "mean_throws": float(np.mean(throws)),
+            "fraction_of_best": float(np.mean(throws) / max(self.best.throws, 1)),
+        }
+
+    # --- checkpoints ----------------------------------------------------------------------
+    def state_dict(self) -> dict:
+        return {
+            "config": OmegaConf.to_container(self.cfg, resolve=True),
+            "collector": self.collector.state_dict(),
+            "update": self.update.state_dict(),
+            "best": vars(self.best).copy(),
+            "recording_id": self.recording_id,
+        }
+
+    def load_state_dict(self, state: dict) -> None:
+        self.collector.load_state_dict(state["collector"])
+        self.update.load_state_dict(state["update"])
+        self.best = BestCommand(**state["best"])
+        self.recording_id = state["recording_id"]
+
+    def save(self, path: Path) -> None:
+        """Write the checkpoint atomically: a crash mid-write leaves the previous one intact."""
+        partial = path.with_suffix(".partial")
+        torch.save(self.state_dict(), partial)
+        os.replace(partial, path)
+
+    def close(self) -> None:
+        self.collector.shutdown()
+        self.env.close()
+
+
+def load_checkpoint(path: str | Path) -> dict:
+    """A DPS checkpoint from its file or its run directory; ``ValueError`` if it is not one."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / CHECKPOINT
+    if not path.is_file():
+        raise ValueError(f"resume: no checkpoint at {path}")
+    try:
+        state = torch.load(path, weights_only=False)
+    except Exception as error:  # torch raises many kinds on a damaged file
+        raise ValueError(f"resume: {path} is not a readable checkpoint ({error})") from None
+    if not isinstance(state, dict) or "collector" not in state:
+        raise ValueError(f"resume: {path} is not a DPS checkpoint")
+    return state
+
+
+def _json(data: dict) -> str:
+    return json.dumps(data, indent=2) + "\n"
+
+
+def _finite_or_none(value: float) -> float | None:
+    return None if math.isnan(value) else value

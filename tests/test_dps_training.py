@@ -1,0 +1,234 @@
+"""DPSCollector batches; DPS training, checkpoints and resumes; train.py from the command line."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import torch
+from hydra import compose, initialize_config_dir
+
+from jugglerl.commands import load_command
+from jugglerl.dps.collector import DPSCollector
+from jugglerl.dps.distribution import SearchDistribution
+from jugglerl.dps.params import (
+    ViaPointConstraints,
+    command_to_params,
+    component_stds,
+    params_to_command,
+)
+from jugglerl.dps.rollouts import CommandRollouts
+from jugglerl.dps.training import DPSTraining, load_checkpoint
+from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.reading import column
+from jugglerl_envs import JuggleEnv
+
+ROOT = Path(__file__).resolve().parents[1]
+SHORT = ["env.duration=8", "algo.rollouts=4", "algo.noise_check.seeds=2", "progress=false"]
+
+
+def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
+    env = JuggleEnv(duration=8.0)
+    expert = command_to_params(load_command("expert"))
+    stds = component_stds(3, {"cycle": 0.05, "time": 0.02, "lift": 0.02, "elbow": 0.02})
+    return DPSCollector(
+        CommandRollouts(env, nthread=2),
+        SearchDistribution.diagonal(expert, stds),
+        ViaPointConstraints.from_model(env.model, 1.0, 5.0, 0.1),
+        frames_per_batch=4,
+        total_frames=total,
+        seed=seed,
+    )
+
+
+def train_config(*overrides: str):
+    with initialize_config_dir(str(ROOT / "configs"), version_base="1.3"):
+        return compose("train", overrides=[*SHORT, *overrides])
+
+
+def test_collector_yields_batches_of_rolled_out_samples():
+    collector = make_collector(total=8)
+    batches = list(collector)
+    collector.shutdown()
+    assert [b.batch_size for b in batches] == [torch.Size([4])] * 2
+    batch = batches[1]
+    assert set(batch.keys(include_nested=True)) >= {
+        "params",
+        "return",
+        "throws",
+        "time_to_drop",
+        "seed",
+        ("collector", "iteration"),
+    }
+    assert batch["params"].shape == (4, 10) and batch["collector", "iteration"].tolist() == [1] * 4
+    assert torch.equal(batch["return"], batch["throws"].double())
+    assert collector.frames == 8 and len(collector) == 2
+    # the counts belong to the samples: re-evaluating them gives the same throws
+    commands = [params_to_command(theta) for theta in batch["params"]]
+    with CommandRollouts(JuggleEnv(duration=8.0), nthread=2) as rollouts:
+        results = rollouts.evaluate(commands, batch["seed"].tolist())
+    assert results.throws.tolist() == batch["throws"].tolist()
+    assert len(set(batch["params"][:, 0].tolist())) == 4  # four different samples
+
+
+def test_update_policy_weights_sets_the_sampling_distribution():
+    collector = make_collector(total=-1)
+    target = torch.tensor([2.0, 0.0, -1.5708, 2.15, 1.0, -1.5708, 1.5, 1.5, -1.5708, 2.15])
+    narrow = SearchDistribution.diagonal(target, torch.full((10,), 1e-9))
+    collector.update_policy_weights_(narrow.to_tensordict())
+    batch = collector.collect_batch()
+    collector.shutdown()
+    assert torch.allclose(batch["params"], target.double().expand(4, 10), atol=1e-7)
+    with pytest.raises(TypeError, match="SearchDistribution"):
+        collector.update_policy_weights_({"mean": target})
+
+
+def test_collector_state_restores_the_same_samples():
+    first = make_collector(seed=5, total=-1)
+    first.collect_batch()
+    state = first.state_dict()
+    expected = first.collect_batch()
+    resumed = make_collector(seed=99, total=-1)
+    resumed.load_state_dict(state)
+    again = resumed.collect_batch()
+    first.shutdown()
+    resumed.shutdown()
+    assert torch.equal(expected["params"], again["params"])
+    assert torch.equal(expected["throws"], again["throws"])
+
+
+def run_training(cfg, run_dir: Path, state: dict | None = None) -> tuple[dict, DPSTraining]:
+    training = DPSTraining(cfg, run_dir)
+    if state is not None:
+        training.load_state_dict(state)
+    with RerunLogger.from_config(cfg.logger, run_dir) as logger:
+        metrics = training.run(logger, progress=False)
+    training.close()
+    return metrics, training
+
+
+@pytest.mark.parametrize("update", ["greedy", "ereps"])
+def test_a_resumed_run_reproduces_the_uninterrupted_one(tmp_path, update):
+    straight, _ = run_training(
+        train_config(f"algo.update={update}", "algo.episodes=3", "seed=4"), tmp_path / "straight"
+    )
+    run_training(
+        train_config(f"algo.update={update}", "algo.episodes=2", "seed=4"), tmp_path / "split"
+    )
+    state = load_checkpoint(tmp_path / "split")
+    assert state["collector"]["iteration"] == 2
+    resumed, training = run_training(
+        train_config(f"algo.update={update}", "algo.episodes=3", "seed=4"),
+        tmp_path / "split",
+        state,
+    )
+    assert resumed["history"] == straight["history"]
+    assert resumed["best_command"] == straight["best_command"]
+    final = load_checkpoint(tmp_path / "straight")["collector"]["distribution"]
+    assert torch.equal(training.collector.distribution.mean, final["mean"])
+
+
+def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
+    metrics, training = run_training(train_config("algo.episodes=3"), tmp_path)
+    history = metrics["history"]
+    assert [r["rollouts"] for r in history] == [4, 8, 12]
+    assert metrics["best_throws"] == max(r["max_throws"] for r in history)
+    assert [r["best_throws"] for r in history] == sorted(r["best_throws"] for r in history)
+    best = load_command(tmp_path / "best_command.yaml")
+    assert best == training.best_command()
+    # the best command replays to its score in the env, from its roll-out's start
+    env = JuggleEnv(duration=8.0)
+    replay = run_episode(env, CommandPolicy(best, env), seed=training.best.seed)
+    assert replay.throws == metrics["best_throws"] > 0
+    assert metrics["noise_check"]["seeds"] == [0, 1]
+    rrd = tmp_path / "train.rrd"
+    steps, values = column(rrd, "dps/best_throws", "Scalars:scalars", "step")
+    assert steps.tolist() == [4, 8, 12] and values.ravel().tolist() == [
+        r["best_throws"] for r in history
+    ]
+    best_episode = f"best/{metrics['best_found_at_rollout']:05d}/plots/ball_height"
+    times, _ = column(rrd, best_episode, "Scalars:scalars", "sim_time")
+    assert times[-1] == pytest.approx(8.0)  # the best episode was recorded whole
+
+
+def run_train(*overrides: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "train.py"), *SHORT, *overrides],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=timeout,
+    )
+
+
+def test_train_script_runs_and_resumes_from_its_run_directory(tmp_path):
+    first = run_train("algo.episodes=1", f"hydra.run.dir={tmp_path}")
+    assert first.returncode == 0, first.stderr
+    assert "best" in first.stdout and (tmp_path / "best_command.yaml").is_file()
+    resumed = run_train(f"resume={tmp_path}", "algo.episodes=2", f"hydra.run.dir={tmp_path}/r")
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"resuming {tmp_path} at episode 1" in resumed.stdout
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert [record["rollouts"] for record in metrics["history"]] == [4, 8]
+    assert (tmp_path / "train.1.rrd").is_file()  # the first recording is kept
+
+
+def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            str(ROOT / "scripts" / "train.py"),
+            *SHORT,
+            "algo.episodes=1000",
+            f"hydra.run.dir={tmp_path}",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    deadline = time.monotonic() + 120
+    while not (tmp_path / "checkpoint.pt").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode != 0
+    assert "interrupted after" in stderr and f"resume={tmp_path}" in stderr
+    assert "Traceback" not in stderr
+    state = load_checkpoint(tmp_path)
+    assert state["collector"]["iteration"] >= 1
+    verify = subprocess.run(
+        [str(Path(sys.executable).parent / "rerun"), "rrd", "verify", str(tmp_path / "train.rrd")],
+        capture_output=True,
+    )
+    assert verify.returncode == 0, verify.stderr
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("algo.update=adam", "error: algo.update='adam' is not one of greedy, weighted, elite"),
+        ("algo.update=elite algo.elite=50", "error: algo.elite=50 must be in [2, algo.rollouts=4]"),
+        ("algo.start=missing.yaml", "error: no command file at missing.yaml"),
+        ("resume=nowhere", "error: resume: no checkpoint at nowhere"),
+    ],
+)
+def test_bad_config_gives_one_clear_line(tmp_path, override, message):
+    result = run_train(*override.split(), f"hydra.run.dir={tmp_path}")
+    assert result.returncode != 0
+    assert result.stderr.strip().splitlines()[-1].startswith(message), result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_a_malformed_start_command_names_the_file_and_the_problem(tmp_path):
+    command = tmp_path / "bad.yaml"
+    command.write_text("cycle: 2.0\nvia_points: [[1.5, -1.5708, 2.0], [0.5, -1.5708, 1.5]]\n")
+    result = run_train(f"algo.start={command}", f"hydra.run.dir={tmp_path}")
+    assert result.returncode != 0
+    assert result.stderr.strip() == (
+        f"error: {command}: via-point times [1.5, 0.5] must increase strictly within [0, cycle=2.0)"
+    )
