@@ -4,16 +4,11 @@ Each iteration samples ``frames_per_batch`` parameter vectors θ from the curren
 distribution, rolls their commands out at raw physics speed (``CommandRollouts``) and yields a
 ``[frames_per_batch]`` TensorDict:
 
-=====================  ==========  =====================================================
-key                    dtype       meaning
-=====================  ==========  =====================================================
-``params``             float64     θ ``[1 + 3p]`` (layout in ``jugglerl.dps.params``)
-``return``             float64     throws in the roll-out (the paper's reward)
-``throws``             int64       same, as a count
-``time_to_drop``       float64     s until the ball fell below the drop height; NaN: never
-``seed``               int64       the env reset seed of the roll-out
-``collector/iteration`` int64      index of the batch
-=====================  ==========  =====================================================
+- ``params`` (float64, ``[1 + 3p]``): θ, laid out as in ``jugglerl.dps.params``;
+- ``return`` (float64): throws in the roll-out (the paper's reward); ``throws``: the same as int64;
+- ``time_to_drop`` (float64): seconds until the ball fell below the drop height, NaN if never;
+- ``seed`` (int64): the env reset seed of the roll-out;
+- ``("collector", "iteration")`` (int64): index of the batch.
 
 A "frame" here is one roll-out (one whole episode): ``total_frames`` is the roll-out budget.
 The learner refits the distribution from the batch and hands it back with

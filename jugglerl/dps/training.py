@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -62,16 +62,22 @@ class BestCommand:
     seed: int = 0
     rollout: int = 0
     time_to_drop: float = math.nan
-    history: list[dict] = field(default_factory=list)
 
 
 class DPSTraining:
-    """One DPS run. ``run()`` trains to ``algo.episodes``; ``load(path)`` resumes a checkpoint."""
+    """One DPS run. ``run()`` trains to ``algo.episodes``; to resume, ``load_state_dict`` the
+    state of ``load_checkpoint(path)`` first."""
 
     def __init__(self, cfg: DictConfig, run_dir: str | Path):
         self.cfg = cfg
         self.run_dir = Path(run_dir)
         algo = cfg.algo
+        if algo.episodes < 1 or algo.rollouts < 1:
+            raise ValueError("algo.episodes and algo.rollouts must be >= 1")
+        if algo["update"] == "elite" and not 2 <= algo.elite <= algo.rollouts:
+            raise ValueError(
+                f"algo.elite={algo.elite} must be in [2, algo.rollouts={algo.rollouts}]"
+            )
         self.env = make_juggle_env(cfg.env)
         start = load_command(algo.start)
         self.pan = start.pan
@@ -91,12 +97,6 @@ class DPSTraining:
             epsilon=algo.epsilon,
             min_std_scale=algo.min_std_scale,
         )
-        if algo.episodes < 1 or algo.rollouts < 1:
-            raise ValueError("algo.episodes and algo.rollouts must be >= 1")
-        if algo["update"] == "elite" and not 2 <= algo.elite <= algo.rollouts:
-            raise ValueError(
-                f"algo.elite={algo.elite} must be in [2, algo.rollouts={algo.rollouts}]"
-            )
         self.collector = DPSCollector(
             CommandRollouts(self.env, nthread=algo.threads),
             SearchDistribution.diagonal(start_params, stds),
@@ -107,6 +107,7 @@ class DPSTraining:
             seed=cfg.seed,
         )
         self.best = BestCommand(start_params)
+        self.history: list[dict] = []  # one record per episode
         self.recording_id: str | None = None
 
     # --- the loop -------------------------------------------------------------------------
@@ -124,7 +125,7 @@ class DPSTraining:
         with bar:
             for batch in self.collector:
                 improved = self._learn(batch)
-                self._log(logger, self.best.history[-1])
+                self._log(logger, self.history[-1])
                 if improved:
                     save_command(self.best_command(), self.run_dir / BEST_COMMAND)
                     self._record_best(logger)
@@ -148,7 +149,7 @@ class DPSTraining:
             self.best.seed = int(batch["seed"][index])
             self.best.rollout = first + index + 1
             self.best.time_to_drop = float(batch["time_to_drop"][index])
-        self.best.history.append(
+        self.history.append(
             {
                 "episode": self.collector.iteration,
                 "rollouts": self.collector.frames,
@@ -168,9 +169,14 @@ class DPSTraining:
         return improved
 
     def _log(self, logger: RerunLogger, record: dict) -> None:
-        step = record["rollouts"]
-        scalars = {key: value for key, value in record.items() if isinstance(value, (int, float))}
-        logger.log_metrics({join(DPS, key): value for key, value in scalars.items()}, step)
+        """The episode's record as ``dps/<key>`` scalars at step = roll-outs so far."""
+        counters = ("episode", "rollouts")
+        scalars = {
+            join(DPS, key): value
+            for key, value in record.items()
+            if key not in counters and isinstance(value, (int, float))
+        }
+        logger.log_metrics(scalars, record["rollouts"])
 
     def _record_best(self, logger: RerunLogger) -> None:
         """Replay the new best command in the env and record it under ``best/<roll-outs>``."""
@@ -192,7 +198,7 @@ class DPSTraining:
     def metrics(self, final: bool = False) -> dict:
         """Best command, milestones and history; with ``final``, the best under reset noise."""
         reached = {}
-        for record in self.best.history:
+        for record in self.history:
             for n, rollout in record["first_rollout_with"].items():
                 reached.setdefault(n, rollout)
         metrics = {
@@ -204,7 +210,7 @@ class DPSTraining:
             "rollouts": self.collector.frames,
             "first_rollout_with": {n: reached.get(str(n)) for n in MILESTONES},
             "best_command": self.best_command().to_dict(),
-            "history": self.best.history,
+            "history": self.history,
         }
         if final and self.cfg.algo.noise_check.seeds > 0:
             metrics["noise_check"] = self.noise_check()
@@ -232,6 +238,7 @@ class DPSTraining:
             "collector": self.collector.state_dict(),
             "update": self.update.state_dict(),
             "best": vars(self.best).copy(),
+            "history": self.history,
             "recording_id": self.recording_id,
         }
 
@@ -239,6 +246,7 @@ class DPSTraining:
         self.collector.load_state_dict(state["collector"])
         self.update.load_state_dict(state["update"])
         self.best = BestCommand(**state["best"])
+        self.history = list(state["history"])
         self.recording_id = state["recording_id"]
 
     def save(self, path: Path) -> None:
