@@ -28,7 +28,7 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
-from jugglerl.commands import load_command, save_command
+from jugglerl.commands import ViaPointCommand, load_command, save_command
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import SearchDistribution
@@ -132,7 +132,7 @@ class DPSTraining:
                 self.save(self.run_dir / CHECKPOINT)
                 bar.set_postfix(best=self.best.throws, mean=f"{batch['return'].mean():.1f}")
                 bar.update()
-        metrics = self.metrics(final=True)
+        metrics = self.final_metrics()
         (self.run_dir / METRICS).write_text(_json(metrics))
         return metrics
 
@@ -156,7 +156,7 @@ class DPSTraining:
                 "best_throws": self.best.throws,
                 "max_throws": int(batch["throws"].max()),
                 "mean_throws": float(batch["return"].mean()),
-                "dropped": float(torch.isfinite(batch["time_to_drop"]).double().mean()),
+                "dropped_fraction": float(torch.isfinite(batch["time_to_drop"]).double().mean()),
                 "mean_cycle": float(distribution.mean[0]),
                 "std_cycle": float(distribution.stds[0]),
                 "first_rollout_with": {
@@ -192,11 +192,11 @@ class DPSTraining:
         logger.send_blueprint(juggling_blueprint(root, metric_groups=[DPS]))
 
     # --- results --------------------------------------------------------------------------
-    def best_command(self):
+    def best_command(self) -> ViaPointCommand:
         return params_to_command(self.best.params, self.pan, name=f"dps_best_{self.best.throws}")
 
-    def metrics(self, final: bool = False) -> dict:
-        """Best command, milestones and history; with ``final``, the best under reset noise."""
+    def final_metrics(self) -> dict:
+        """Best command, milestones, history, and the best command under reset noise."""
         reached = {}
         for record in self.history:
             for n, rollout in record["first_rollout_with"].items():
@@ -212,7 +212,7 @@ class DPSTraining:
             "best_command": self.best_command().to_dict(),
             "history": self.history,
         }
-        if final and self.cfg.algo.noise_check.seeds > 0:
+        if self.cfg.algo.noise_check.seeds > 0:
             metrics["noise_check"] = self.noise_check()
         return metrics
 
