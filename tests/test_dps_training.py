@@ -13,11 +13,9 @@ from hydra import compose, initialize_config_dir
 
 from jugglerl.commands import load_command
 from jugglerl.dps.collector import DPSCollector
-from jugglerl.dps.distribution import SearchDistribution
+from jugglerl.dps.distribution import PAPER_STDS, SearchDistribution
 from jugglerl.dps.params import (
     ViaPointConstraints,
-    command_to_params,
-    component_stds,
     params_to_command,
 )
 from jugglerl.dps.rollouts import CommandRollouts
@@ -33,11 +31,9 @@ SHORT = ["env.duration=8", "algo.rollouts=4", "algo.noise_check.seeds=2", "progr
 
 def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
     env = JuggleEnv(duration=8.0)
-    expert = command_to_params(load_command("expert"))
-    stds = component_stds(3, {"cycle": 0.05, "time": 0.02, "lift": 0.02, "elbow": 0.02})
     return DPSCollector(
         CommandRollouts(env, nthread=2),
-        SearchDistribution.diagonal(expert, stds),
+        SearchDistribution.around(load_command("expert"), PAPER_STDS),
         ViaPointConstraints.from_model(env.model, 1.0, 5.0, 0.1),
         frames_per_batch=4,
         total_frames=total,
