@@ -17,7 +17,13 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from jugglerl.dps.training import CHECKPOINT, DPSTraining, load_checkpoint
+from jugglerl.dps.training import (
+    BEST_COMMAND,
+    CHECKPOINT,
+    METRICS,
+    DPSTraining,
+    load_checkpoint,
+)
 from jugglerl.recording.logger import RerunLogger
 
 
@@ -62,7 +68,7 @@ def train_dps(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
             else ""
         )
     )
-    print(f"-> {run_dir / 'best_command.yaml'}, {run_dir / 'metrics.json'}, {logger.path}")
+    print(f"-> {run_dir / BEST_COMMAND}, {run_dir / METRICS}, {logger.path}")
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="train")

@@ -86,9 +86,11 @@ class DPSTraining:
         )
         start_params = command_to_params(start)
         self.constraints.check(len(start.via_points))
-        if self.constraints.violations(start_params):
-            problems = "; ".join(self.constraints.violations(start_params))
-            raise ValueError(f"algo.start={algo.start}: outside the constraints: {problems}")
+        problems = self.constraints.violations(start_params)
+        if problems:
+            raise ValueError(
+                f"algo.start={algo.start}: outside the constraints: {'; '.join(problems)}"
+            )
         stds = component_stds(len(start.via_points), dict(algo.std))
         self.update: UpdateRule = make_update(
             algo["update"],  # item access: DictConfig.update is a method
