@@ -2,15 +2,36 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import gymnasium as gym
 
 from jugglerl.commands import load_command
 from jugglerl.evaluation import CommandPolicy, Policy
 
+#: File names that mark a trained checkpoint rather than a command file.
+CHECKPOINT_SUFFIX = ".pt"
+
 
 def load_policy(spec: str, env: gym.Env) -> Policy:
-    """A policy from a shipped command name (``expert``) or a command file path.
+    """A policy from a shipped command name (``expert``), a command file path, or a DDPG
+    checkpoint (a ``.pt`` file, or a run directory holding ``checkpoint.pt``).
 
-    Raises ``CommandError`` (a ``ValueError``) with a one-line reason when ``spec`` is unusable.
+    Raises ``ValueError`` with a one-line reason when ``spec`` is unusable.
     """
+    path = Path(spec)
+    if path.suffix == CHECKPOINT_SUFFIX or path.is_dir():
+        return _checkpoint_policy(path)
     return CommandPolicy(load_command(spec), env)
+
+
+def _checkpoint_policy(path: Path) -> Policy:
+    # torch and torchrl load only when a checkpoint is asked for
+    from jugglerl.checkpoints import checkpoint_algo, load_checkpoint
+    from jugglerl.ddpg.policy import ActorPolicy
+
+    state = load_checkpoint(path)
+    algo = checkpoint_algo(state)
+    if algo != "ddpg":
+        raise ValueError(f"{path} is a {algo} checkpoint; evaluate its best_command.yaml instead")
+    return ActorPolicy.from_state(state)

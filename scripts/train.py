@@ -1,11 +1,14 @@
 """Train a juggling policy; everything lands in the run directory.
 
+python scripts/train.py                                   # DDPG: MLP actor, expert-centred noise
+python scripts/train.py actor=lstm reward=contacts            # LSTM actor, the paper's reward 3
+python scripts/train.py exploration=ou collector.total_frames=100000
 python scripts/train.py algo=dps                              # eREPS from the expert, 500 roll-outs
 python scripts/train.py algo=dps algo.update=greedy seed=1    # the paper's keep-best search
-python scripts/train.py algo=dps env=earth                    # real gravity, UR5e speed limit
-python scripts/train.py resume=outputs/train/dps/<run>        # continue from its checkpoint
+python scripts/train.py resume=outputs/train/<algo>/<run>     # continue from its checkpoint
+python scripts/evaluate.py policy=outputs/train/ddpg/<run>/checkpoint.pt
 python scripts/evaluate.py policy=outputs/train/dps/<run>/best_command.yaml
-rerun outputs/train/dps/<run>/train.rrd                       # learning curves, best episodes
+rerun outputs/train/<algo>/<run>/train.rrd                    # learning curves, episodes
 """
 
 from __future__ import annotations
@@ -17,14 +20,10 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from jugglerl.dps.training import (
-    BEST_COMMAND,
-    CHECKPOINT,
-    METRICS,
-    DPSTraining,
-    load_checkpoint,
-)
+from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
 from jugglerl.recording.logger import RerunLogger
+
+ALGOS = ("ddpg", "dps")
 
 
 def resumed_config(cfg: DictConfig, state: dict) -> DictConfig:
@@ -37,10 +36,26 @@ def resumed_config(cfg: DictConfig, state: dict) -> DictConfig:
     return saved
 
 
-def train_dps(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
-    training = DPSTraining(cfg, run_dir)
+def make_training(cfg: DictConfig, run_dir: Path, state: dict | None):
+    """The training loop of ``cfg.algo.name``, restored from ``state`` when resuming."""
+    if cfg.algo.name == "dps":
+        from jugglerl.dps.training import DPSTraining
+
+        training = DPSTraining(cfg, run_dir)
+        if state is not None:
+            training.load_state_dict(state)
+        return training
+    if cfg.algo.name == "ddpg":
+        from jugglerl.ddpg.training import DDPGTraining
+
+        return DDPGTraining(cfg, run_dir, state)
+    raise ValueError(f"algo={cfg.algo.name} is not available; choose one of {', '.join(ALGOS)}")
+
+
+def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
+    training = make_training(cfg, run_dir, state)
     if state is not None:
-        training.load_state_dict(state)
+        print(f"resuming {run_dir} at {training.position()}")
     try:
         with RerunLogger.from_config(
             cfg.logger, run_dir, recording_id=training.recording_id
@@ -51,24 +66,14 @@ def train_dps(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
             metrics = training.run(logger, progress=cfg.progress)
     except KeyboardInterrupt:
         sys.exit(
-            f"interrupted after {training.collector.iteration} episodes: checkpoint in"
-            f" {run_dir / CHECKPOINT}; continue with: python scripts/train.py resume={run_dir}"
+            f"interrupted at {training.position()}: checkpoint in {run_dir / CHECKPOINT};"
+            f" continue with: python scripts/train.py resume={run_dir}"
         )
     finally:
         training.close()
-    check = metrics.get("noise_check")
-    print(
-        f"DPS ({cfg.algo['update']}): best {metrics['best_throws']} throws in"
-        f" {cfg.env.duration:g} s after {metrics['rollouts']} roll-outs"
-        f" (found at roll-out {metrics['best_found_at_rollout']})"
-        + (
-            f"; with {check['reset_noise']} m start noise: {check['mean_throws']:.1f} on average"
-            f" over {len(check['seeds'])} seeds"
-            if check
-            else ""
-        )
-    )
-    print(f"-> {run_dir / BEST_COMMAND}, {run_dir / METRICS}, {logger.path}")
+    print(training.summary(metrics))
+    files = sorted(p.name for p in run_dir.iterdir() if p.suffix in (".pt", ".yaml", ".json"))
+    print(f"-> {run_dir}: {', '.join(files)}, {logger.path.name}")
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="train")
@@ -77,14 +82,14 @@ def main(cfg: DictConfig) -> None:
     try:
         state = None
         if cfg.resume is not None:
-            state = load_checkpoint(cfg.resume)
+            try:
+                state = load_checkpoint(cfg.resume)
+            except ValueError as error:
+                raise ValueError(f"resume: {error}") from None
             resume = Path(cfg.resume)
             run_dir = resume if resume.is_dir() else resume.parent
             cfg = resumed_config(cfg, state)
-            print(f"resuming {run_dir} at episode {state['collector']['iteration']}")
-        if cfg.algo.name != "dps":
-            raise ValueError(f"algo={cfg.algo.name} is not available; choose dps")
-        train_dps(cfg, run_dir, state)
+        train(cfg, run_dir, state)
     except ValueError as error:
         sys.exit(f"error: {error}")
 

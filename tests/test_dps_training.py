@@ -1,16 +1,13 @@
 """DPSCollector batches; DPS training, checkpoints and resumes; train.py from the command line."""
 
 import json
-import signal
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
+from cli import interrupt_train, rrd_verifies, run_train, train_config
 
+from jugglerl.checkpoints import load_checkpoint
 from jugglerl.commands import load_command
 from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import PAPER_STDS, SearchDistribution
@@ -19,14 +16,19 @@ from jugglerl.dps.params import (
     params_to_command,
 )
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.dps.training import DPSTraining, load_checkpoint
+from jugglerl.dps.training import DPSTraining
 from jugglerl.evaluation import CommandPolicy, run_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column
 from jugglerl_envs import JuggleEnv
 
-ROOT = Path(__file__).resolve().parents[1]
-SHORT = ["env.duration=8", "algo.rollouts=4", "algo.noise_check.seeds=2", "progress=false"]
+SHORT = [
+    "algo=dps",
+    "env.duration=8",
+    "algo.rollouts=4",
+    "algo.noise_check.seeds=2",
+    "progress=false",
+]
 
 
 def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
@@ -39,11 +41,6 @@ def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
         total_frames=total,
         seed=seed,
     )
-
-
-def train_config(*overrides: str):
-    with initialize_config_dir(str(ROOT / "configs"), version_base="1.3"):
-        return compose("train", overrides=[*SHORT, *overrides])
 
 
 def test_collector_yields_batches_of_rolled_out_samples():
@@ -110,15 +107,17 @@ def run_training(cfg, run_dir: Path, state: dict | None = None) -> tuple[dict, D
 @pytest.mark.parametrize("update", ["greedy", "ereps"])
 def test_a_resumed_run_reproduces_the_uninterrupted_one(tmp_path, update):
     straight, _ = run_training(
-        train_config(f"algo.update={update}", "algo.episodes=3", "seed=4"), tmp_path / "straight"
+        train_config(*SHORT, f"algo.update={update}", "algo.episodes=3", "seed=4"),
+        tmp_path / "straight",
     )
     run_training(
-        train_config(f"algo.update={update}", "algo.episodes=2", "seed=4"), tmp_path / "split"
+        train_config(*SHORT, f"algo.update={update}", "algo.episodes=2", "seed=4"),
+        tmp_path / "split",
     )
     state = load_checkpoint(tmp_path / "split")
     assert state["collector"]["iteration"] == 2
     resumed, training = run_training(
-        train_config(f"algo.update={update}", "algo.episodes=3", "seed=4"),
+        train_config(*SHORT, f"algo.update={update}", "algo.episodes=3", "seed=4"),
         tmp_path / "split",
         state,
     )
@@ -129,7 +128,7 @@ def test_a_resumed_run_reproduces_the_uninterrupted_one(tmp_path, update):
 
 
 def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
-    metrics, training = run_training(train_config("algo.episodes=3"), tmp_path)
+    metrics, training = run_training(train_config(*SHORT, "algo.episodes=3"), tmp_path)
     history = metrics["history"]
     assert [r["rollouts"] for r in history] == [4, 8, 12]
     assert metrics["best_throws"] == max(r["max_throws"] for r in history)
@@ -151,21 +150,13 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     assert times[-1] == pytest.approx(8.0)  # the best episode was recorded whole
 
 
-def run_train(*overrides: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "train.py"), *SHORT, *overrides],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=timeout,
-    )
-
-
 def test_train_script_runs_and_resumes_from_its_run_directory(tmp_path):
-    first = run_train("algo.episodes=1", f"hydra.run.dir={tmp_path}")
+    first = run_train(*SHORT, "algo.episodes=1", f"hydra.run.dir={tmp_path}")
     assert first.returncode == 0, first.stderr
     assert "best" in first.stdout and (tmp_path / "best_command.yaml").is_file()
-    resumed = run_train(f"resume={tmp_path}", "algo.episodes=2", f"hydra.run.dir={tmp_path}/r")
+    resumed = run_train(
+        *SHORT, f"resume={tmp_path}", "algo.episodes=2", f"hydra.run.dir={tmp_path}/r"
+    )
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming {tmp_path} at episode 1" in resumed.stdout
     metrics = json.loads((tmp_path / "metrics.json").read_text())
@@ -174,34 +165,13 @@ def test_train_script_runs_and_resumes_from_its_run_directory(tmp_path):
 
 
 def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
-    process = subprocess.Popen(
-        [
-            sys.executable,
-            str(ROOT / "scripts" / "train.py"),
-            *SHORT,
-            "algo.episodes=1000",
-            f"hydra.run.dir={tmp_path}",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=ROOT,
-    )
-    deadline = time.monotonic() + 120
-    while not (tmp_path / "checkpoint.pt").exists() and time.monotonic() < deadline:
-        time.sleep(0.2)
-    process.send_signal(signal.SIGINT)
-    _, stderr = process.communicate(timeout=60)
-    assert process.returncode != 0
-    assert "interrupted after" in stderr and f"resume={tmp_path}" in stderr
+    returncode, stderr = interrupt_train(tmp_path, *SHORT, "algo.episodes=1000")
+    assert returncode != 0
+    assert "interrupted at episode" in stderr and f"resume={tmp_path}" in stderr
     assert "Traceback" not in stderr
     state = load_checkpoint(tmp_path)
     assert state["collector"]["iteration"] >= 1
-    verify = subprocess.run(
-        [str(Path(sys.executable).parent / "rerun"), "rrd", "verify", str(tmp_path / "train.rrd")],
-        capture_output=True,
-    )
-    assert verify.returncode == 0, verify.stderr
+    assert rrd_verifies(tmp_path / "train.rrd")
 
 
 @pytest.mark.parametrize(
@@ -214,7 +184,7 @@ def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
     ],
 )
 def test_bad_config_gives_one_clear_line(tmp_path, override, message):
-    result = run_train(*override.split(), f"hydra.run.dir={tmp_path}")
+    result = run_train(*SHORT, *override.split(), f"hydra.run.dir={tmp_path}")
     assert result.returncode != 0
     assert result.stderr.strip().splitlines()[-1].startswith(message), result.stderr
     assert "Traceback" not in result.stderr
@@ -223,7 +193,7 @@ def test_bad_config_gives_one_clear_line(tmp_path, override, message):
 def test_a_malformed_start_command_names_the_file_and_the_problem(tmp_path):
     command = tmp_path / "bad.yaml"
     command.write_text("cycle: 2.0\nvia_points: [[1.5, -1.5708, 2.0], [0.5, -1.5708, 1.5]]\n")
-    result = run_train(f"algo.start={command}", f"hydra.run.dir={tmp_path}")
+    result = run_train(*SHORT, f"algo.start={command}", f"hydra.run.dir={tmp_path}")
     assert result.returncode != 0
     assert result.stderr.strip() == (
         f"error: {command}: via-point times [1.5, 0.5] must increase strictly within [0, cycle=2.0)"

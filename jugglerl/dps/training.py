@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +27,7 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
+from jugglerl.checkpoints import CHECKPOINT, save_checkpoint
 from jugglerl.commands import ViaPointCommand, load_command, save_command
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.collector import DPSCollector
@@ -46,7 +46,6 @@ from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
 
-CHECKPOINT = "checkpoint.pt"
 BEST_COMMAND = "best_command.yaml"
 METRICS = "metrics.json"
 #: Throw counts whose first roll-out is reported: the paper's DPS best, and this project's bar.
@@ -193,6 +192,25 @@ class DPSTraining:
         recorder.close()
         logger.send_blueprint(juggling_blueprint(root, metric_groups=[DPS]))
 
+    def position(self) -> str:
+        """How far the run has got, for messages."""
+        return f"episode {self.collector.iteration}"
+
+    def summary(self, metrics: dict) -> str:
+        """One line on what the run reached."""
+        check = metrics.get("noise_check")
+        line = (
+            f"DPS ({self.cfg.algo['update']}): best {metrics['best_throws']} throws in"
+            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} roll-outs"
+            f" (found at roll-out {metrics['best_found_at_rollout']})"
+        )
+        if check:
+            line += (
+                f"; with {check['reset_noise']} m start noise: {check['mean_throws']:.1f} on"
+                f" average over {len(check['seeds'])} seeds"
+            )
+        return line
+
     # --- results --------------------------------------------------------------------------
     def best_command(self) -> ViaPointCommand:
         return params_to_command(self.best.params, self.pan, name=f"dps_best_{self.best.throws}")
@@ -252,30 +270,11 @@ class DPSTraining:
         self.recording_id = state["recording_id"]
 
     def save(self, path: Path) -> None:
-        """Write the checkpoint atomically: a crash mid-write leaves the previous one intact."""
-        partial = path.with_suffix(".partial")
-        torch.save(self.state_dict(), partial)
-        os.replace(partial, path)
+        save_checkpoint(self.state_dict(), path)
 
     def close(self) -> None:
         self.collector.shutdown()
         self.env.close()
-
-
-def load_checkpoint(path: str | Path) -> dict:
-    """A DPS checkpoint from its file or its run directory; ``ValueError`` if it is not one."""
-    path = Path(path)
-    if path.is_dir():
-        path = path / CHECKPOINT
-    if not path.is_file():
-        raise ValueError(f"resume: no checkpoint at {path}")
-    try:
-        state = torch.load(path, weights_only=False)
-    except Exception as error:  # torch raises many kinds on a damaged file
-        raise ValueError(f"resume: {path} is not a readable checkpoint ({error})") from None
-    if not isinstance(state, dict) or "collector" not in state:
-        raise ValueError(f"resume: {path} is not a DPS checkpoint")
-    return state
 
 
 def _json(data: dict) -> str:

@@ -1,0 +1,42 @@
+"""Checkpoint files shared by every training algorithm: written atomically, read with clear errors.
+
+A checkpoint is a dict saved with ``torch.save``; it always holds the run's resolved ``config``
+(so ``config["algo"]["name"]`` says which training loop can resume it).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import torch
+
+CHECKPOINT = "checkpoint.pt"
+
+
+def save_checkpoint(state: dict, path: Path) -> None:
+    """Write ``state`` atomically: a crash mid-write leaves the previous checkpoint intact."""
+    partial = path.with_suffix(".partial")
+    torch.save(state, partial)
+    os.replace(partial, path)
+
+
+def load_checkpoint(path: str | Path) -> dict:
+    """A checkpoint from its file or its run directory; ``ValueError`` if it is not one."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / CHECKPOINT
+    if not path.is_file():
+        raise ValueError(f"no checkpoint at {path}")
+    try:
+        state = torch.load(path, weights_only=False)
+    except Exception as error:  # torch raises many kinds on a damaged file
+        raise ValueError(f"{path} is not a readable checkpoint ({error})") from None
+    if not isinstance(state, dict) or "algo" not in state.get("config", {}):
+        raise ValueError(f"{path} is not a JuggleRL training checkpoint")
+    return state
+
+
+def checkpoint_algo(state: dict) -> str:
+    """Name of the algorithm (``dps``, ``ddpg``) that wrote ``state``."""
+    return state["config"]["algo"]["name"]

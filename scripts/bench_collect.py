@@ -1,0 +1,184 @@
+"""Speed of the DDPG stack against bare PyTorch/MuJoCo loops doing the same work, in one run.
+
+    python scripts/bench_collect.py [--frames 20000] [--updates 300] [--repeats 3] [actor=mlp ...]
+
+1. One DDPG update (``DDPGUpdate``: TorchRL's ``DDPGLoss`` + ``SoftUpdate``) against a bare PyTorch
+   update of the same networks on the same batch (TD(0) target from target networks, L2 critic
+   loss, actor loss -Q(s, μ(s)), both Adams, the same gradient clipping, soft target update).
+   Target: ours within 1.2x of bare.
+2. Collection: env steps/s of the TorchRL ``Collector`` (batched env, the transform stack, actor,
+   exploration) against a bare loop that steps the same ``JuggleEnv``s (same frame_skip, same
+   number of envs) with the same actor network and Gaussian noise, resetting dropped envs.
+   Target: ratio >= 0.5. The ratio is printed last.
+
+Trailing ``key=value`` arguments override ``configs/train.yaml`` (e.g. ``collector.num_envs=16``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import statistics
+import time
+
+import numpy as np
+import torch
+from torchrl.collectors import Collector
+from torchrl.envs.utils import ExplorationType, set_exploration_type
+
+from jugglerl.config import make_juggle_env
+from jugglerl.ddpg.training import DDPGTraining
+from jugglerl.ddpg.update import DDPGUpdate
+
+
+def median_time(run, repeats: int) -> float:
+    timings = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        timings.append(time.perf_counter() - start)
+    return statistics.median(timings)
+
+
+# --- updates ------------------------------------------------------------------------------------
+class BareDDPG:
+    """DDPG's update written directly in PyTorch on plain ``nn.Module``s."""
+
+    def __init__(self, actor: torch.nn.Module, critic: torch.nn.Module, cfg):
+        self.actor, self.critic = actor, critic
+        self.actor_target, self.critic_target = copy.deepcopy(actor), copy.deepcopy(critic)
+        self.actor_optimiser = torch.optim.Adam(actor.parameters(), lr=cfg.optim.lr_actor)
+        self.critic_optimiser = torch.optim.Adam(critic.parameters(), lr=cfg.optim.lr_critic)
+        self.gamma, self.tau, self.clip = cfg.algo.gamma, cfg.algo.tau, cfg.optim.max_grad_norm
+
+    def __call__(self, obs, action, reward, next_obs, terminated) -> None:
+        with torch.no_grad():
+            next_q = self.critic_target(torch.cat([next_obs, self.actor_target(next_obs)], -1))
+            target = reward + self.gamma * (1 - terminated) * next_q
+        critic_loss = (self.critic(torch.cat([obs, action], -1)) - target).pow(2).mean()
+        for p in self.critic.parameters():
+            p.requires_grad_(False)
+        actor_loss = -self.critic(torch.cat([obs, self.actor(obs)], -1)).mean()
+        for p in self.critic.parameters():
+            p.requires_grad_(True)
+        self.actor_optimiser.zero_grad()
+        self.critic_optimiser.zero_grad()
+        (actor_loss + critic_loss).backward()
+        torch.nn.utils.clip_grad_norm_(self.actor.parameters(), self.clip)
+        torch.nn.utils.clip_grad_norm_(self.critic.parameters(), self.clip)
+        self.actor_optimiser.step()
+        self.critic_optimiser.step()
+        with torch.no_grad():
+            for net, target_net in (
+                (self.actor, self.actor_target),
+                (self.critic, self.critic_target),
+            ):
+                torch._foreach_lerp_(
+                    list(target_net.parameters()), list(net.parameters()), self.tau
+                )
+
+
+def bare_actor(training: DDPGTraining) -> torch.nn.Module:
+    """The MLP actor's network as a plain module: MLP then tanh (the action bounds are ±1)."""
+    return torch.nn.Sequential(copy.deepcopy(training.actor.module[0].module), torch.nn.Tanh())
+
+
+def bench_updates(training: DDPGTraining, cfg, updates: int, repeats: int) -> tuple[float, float]:
+    """Seconds per update: ours, bare. Both on the same fixed batch."""
+    with torch.no_grad():
+        data = Collector(training.env, training.policy, frames_per_batch=2048, total_frames=2048)
+        for batch in data:
+            training.buffer.extend(batch)
+        data.shutdown(close_env=False)
+    batch = training.buffer.sample()
+    ours = DDPGUpdate(
+        training.actor, copy.deepcopy(training.update.loss.value_network), cfg.algo, cfg.optim
+    )
+    critic = copy.deepcopy(training.update.loss.value_network.module)
+    bare = BareDDPG(bare_actor(training), critic, cfg)
+    tensors = (
+        batch["observation"],
+        batch["action"],
+        batch["next", "reward"],
+        batch["next", "observation"],
+        batch["next", "terminated"].float(),
+    )
+    ours_time = median_time(lambda: [ours(batch) for _ in range(updates)], repeats) / updates
+    bare_time = median_time(lambda: [bare(*tensors) for _ in range(updates)], repeats) / updates
+    return ours_time, bare_time
+
+
+# --- collection ---------------------------------------------------------------------------------
+def bench_collector(training: DDPGTraining, frames: int, repeats: int) -> float:
+    """Env steps/s of TorchRL's Collector over the training env stack and exploration policy."""
+    batch = training.cfg.collector.frames_per_batch
+
+    def collect():
+        collector = Collector(
+            training.env, training.policy, frames_per_batch=batch, total_frames=frames
+        )
+        for _ in collector:
+            pass
+        collector.shutdown(close_env=False)
+
+    with torch.no_grad(), set_exploration_type(ExplorationType.RANDOM):
+        return frames / median_time(collect, repeats)
+
+
+def bench_bare_loop(training: DDPGTraining, cfg, frames: int, repeats: int) -> float:
+    """Env steps/s of plain JuggleEnvs stepped in a Python loop by the same actor network."""
+    envs = [make_juggle_env(cfg.env) for _ in range(cfg.collector.num_envs)]
+    actor = bare_actor(training)
+    sigma = cfg.exploration.get("sigma_init", 0.1)
+    rng = np.random.default_rng(0)
+    observations = np.stack([env.reset(seed=i)[0] for i, env in enumerate(envs)])
+
+    def loop():
+        nonlocal observations
+        for _ in range(frames // len(envs)):
+            inputs = torch.as_tensor(observations, dtype=torch.float32)
+            inputs = torch.cat([inputs, torch.zeros(len(envs), 3)], -1)  # the time features
+            actions = actor(inputs).numpy() + sigma * rng.standard_normal((len(envs), 3))
+            for i, env in enumerate(envs):
+                observations[i], _, terminated, truncated, _ = env.step(actions[i])
+                if terminated or truncated:
+                    observations[i] = env.reset()[0]
+
+    with torch.no_grad():
+        return frames / median_time(loop, repeats)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--frames", type=int, default=20000, help="env steps per collection timing")
+    parser.add_argument("--updates", type=int, default=300, help="updates per update timing")
+    parser.add_argument("--repeats", type=int, default=3)
+    args, overrides = parser.parse_known_args()
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    configs = Path(__file__).resolve().parents[1] / "configs"
+    with initialize_config_dir(str(configs), version_base="1.3"):
+        cfg = compose("train", overrides=["actor=mlp", *overrides])
+    torch.set_num_threads(1)  # the collector and the bare loop each run on one core
+    training = DDPGTraining(cfg, Path("/tmp/unused"))  # its env stack, actor and exploration
+
+    ours_update, bare_update = bench_updates(training, cfg, args.updates, args.repeats)
+    print(
+        f"DDPG update, batch {cfg.replay_buffer.batch_size}: ours {ours_update * 1e3:.2f} ms,"
+        f" bare PyTorch {bare_update * 1e3:.2f} ms, ratio {ours_update / bare_update:.2f}"
+        " (target <= 1.2)"
+    )
+    ours = bench_collector(training, args.frames, args.repeats)
+    bare = bench_bare_loop(training, cfg, args.frames, args.repeats)
+    print(
+        f"collection, {cfg.collector.num_envs} envs: bare loop {bare:,.0f} env steps/s,"
+        f" TorchRL collector {ours:,.0f} env steps/s"
+    )
+    print(f"ratio {ours / bare:.2f} (target >= 0.5)")
+    training.close()
+
+
+if __name__ == "__main__":
+    main()
