@@ -9,6 +9,7 @@ import torch
 from cli import ROOT, interrupt_train, rrd_verifies, run_train, train_config
 
 from jugglerl.checkpoints import load_checkpoint
+from jugglerl.ddpg.policy import ActorPolicy
 from jugglerl.ddpg.training import DDPGTraining
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column
@@ -75,6 +76,19 @@ def test_a_resumed_checkpoint_restores_networks_optimisers_and_exploration(tmp_p
     torch.testing.assert_close(restored_optimiser[0]["exp_avg"], saved_optimiser[0]["exp_avg"])
     assert int(restored.noise.frames) == int(training.noise.frames) == 256
     restored.close()
+
+
+def test_the_checkpoint_ships_the_target_actor_unless_told_otherwise(tmp_path):
+    for target in (True, False):
+        cfg = train_config(*TINY, f"eval.target_actor={target}")
+        _, training = train(cfg, tmp_path / str(target))
+        loss = training.update.loss
+        targets = loss.target_actor_network_params.flatten_keys()
+        online = loss.actor_network_params.flatten_keys()
+        shipped = ActorPolicy.from_state(load_checkpoint(tmp_path / str(target))).actor
+        for key, value in shipped.state_dict().items():
+            torch.testing.assert_close(value, (targets if target else online)[key])
+            assert not torch.equal(targets[key], online[key])
 
 
 def test_train_script_trains_resumes_and_evaluate_replays_the_checkpoint(tmp_path):

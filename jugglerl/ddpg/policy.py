@@ -34,7 +34,7 @@ class ActorPolicy:
 
     @classmethod
     def from_state(cls, state: dict) -> ActorPolicy:
-        """The actor of a DDPG checkpoint (``jugglerl.ddpg.training.DDPGTraining.state_dict``)."""
+        """The deployed actor of a DDPG checkpoint (``DDPGTraining.state_dict``'s ``policy``)."""
         cfg = OmegaConf.create(state["config"])
         transforms = observation_transforms(
             cfg.state,
@@ -44,7 +44,7 @@ class ActorPolicy:
         )
         observation_size = OBSERVATION_SIZE + (NUM_TIME_FEATURES if cfg.state.timestamp else 0)
         actor = make_actor(cfg.actor, observation_size, Bounded(-1.0, 1.0, shape=(ACTION_SIZE,)))
-        actor.load_state_dict(state["actor"])
+        actor.load_state_dict(state["policy"])
         return cls(actor, transforms)
 
     def reset(self) -> None:

@@ -5,7 +5,8 @@ default) and a run directory, where it writes
 
 - ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
   actor, critic and their targets, optimisers, the observation normalisation, the exploration
-  state, RNG states, counters, history and config (the replay buffer is not saved: a resumed
+  state, RNG states, counters, history and config, and the deployed actor's weights
+  (``policy``: what ``scripts/evaluate.py`` runs) (the replay buffer is not saved: a resumed
   run refills it);
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
@@ -193,13 +194,19 @@ class DDPGTraining:
         )
 
     # --- evaluation -----------------------------------------------------------------------
+    def deployed_actor(self):
+        """The actor evaluation and ``evaluate.py`` run: the target (Polyak-averaged) actor with
+        ``eval.target_actor``, else the online one. The online actor can swing between
+        updates; its average moves by ``algo.tau`` per update and holds on to what worked."""
+        return self.update.target_actor() if self.cfg.eval.target_actor else self.actor
+
     def actor_policy(self) -> ActorPolicy:
-        """The current actor as a deterministic ``Policy`` on plain Gymnasium envs."""
+        """The deployed actor as a deterministic ``Policy`` on plain Gymnasium envs."""
         norm = normalisation(self.env)
         transforms = observation_transforms(
             self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
         )
-        return ActorPolicy(self.actor, transforms)
+        return ActorPolicy(self.deployed_actor(), transforms)
 
     def evaluate(self, logger: RerunLogger, duration: float) -> dict:
         """Deterministic episodes of ``duration`` s from env seeds ``0..eval.seeds-1``."""
@@ -228,6 +235,7 @@ class DDPGTraining:
         return {
             "config": OmegaConf.to_container(self.cfg, resolve=True),
             "actor": self.actor.state_dict(),
+            "policy": self.deployed_actor().state_dict(),
             "update": self.update.state_dict(),
             "normalisation": {"loc": norm.loc.clone(), "scale": norm.scale.clone()},
             "exploration": self.noise.state_dict(),

@@ -8,6 +8,8 @@ steps: stepping the critic first would change weights the actor's graph still ne
 
 from __future__ import annotations
 
+import copy
+
 import torch
 from omegaconf import DictConfig
 from tensordict import TensorDictBase
@@ -84,6 +86,12 @@ class DDPGUpdate:
             "loss_critic": float(losses["loss_value"].detach()),
             "q_value": float(losses["pred_value"].detach().mean()),
         }
+
+    def target_actor(self) -> TensorDictModule:
+        """A copy of the actor carrying the target (Polyak-averaged) weights."""
+        actor = copy.deepcopy(self.loss.actor_network)
+        self.loss.target_actor_network_params.data.to_module(actor)
+        return actor
 
     def state_dict(self) -> dict:
         """Networks and their targets, and both optimisers."""
