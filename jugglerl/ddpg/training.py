@@ -71,7 +71,7 @@ class DDPGTraining:
         self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
         self.frames = 0
         self.updates = 0
-        self.wall_seconds = 0.0  # spent collecting and updating, over all sessions of the run
+        self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
         self.history: list[dict] = []  # one record per collected batch
         self.evaluations: list[dict] = []
         self.recording_id: str | None = None
