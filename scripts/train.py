@@ -1,6 +1,6 @@
 """Train a juggling policy; everything lands in the run directory.
 
-python scripts/train.py                                   # DDPG: MLP actor, expert-centred noise
+python scripts/train.py                                       # DDPG: MLP actor, expert noise
 python scripts/train.py actor=lstm reward=contacts            # LSTM actor, the paper's reward 3
 python scripts/train.py exploration=ou collector.total_frames=100000
 python scripts/train.py algo=dps                              # eREPS from the expert, 500 roll-outs
