@@ -11,22 +11,19 @@ and the run's frames and wall time. Runs of the same reward and actor (seeds) ar
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
-import sys
 from collections import defaultdict
 from pathlib import Path
 
 from jugglerl.ddpg.actors import ACTORS
 from jugglerl.ddpg.training import METRICS
+from jugglerl.run_tables import markdown_table, run_metrics, table_main
 from jugglerl_envs.juggle import REWARDS
 
 
 def load_runs(folder: Path) -> dict[tuple[str, str], list[dict]]:
     runs = defaultdict(list)
-    for path in sorted(folder.rglob(METRICS)):
-        metrics = json.loads(path.read_text())
+    for metrics in run_metrics(folder, METRICS):
         if "final_evaluation" in metrics:  # DDPG runs only
             runs[metrics["reward"], metrics["actor"]].append(metrics)
     return runs
@@ -43,7 +40,7 @@ def table(runs: dict[tuple[str, str], list[dict]]) -> str:
         "frames",
         "wall (min)",
     ]
-    lines = ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)]
+    rows = []
     order = sorted(runs, key=lambda key: (REWARDS.index(key[0]), ACTORS.index(key[1])))
     for reward, actor in order:
         group = sorted(runs[reward, actor], key=lambda r: r["seed"])
@@ -60,19 +57,14 @@ def table(runs: dict[tuple[str, str], list[dict]]) -> str:
             f"{group[0]['frames']:,}",
             f"{statistics.mean(r['wall_seconds'] for r in group) / 60:.1f}",
         ]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+        rows.append(cells)
+    return markdown_table(header, rows)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("folder", type=Path, help="a multirun folder (or any folder of runs)")
-    args = parser.parse_args()
-    runs = load_runs(args.folder)
-    if not runs:
-        sys.exit(f"error: no DDPG {METRICS} below {args.folder}")
-    print(table(runs))
+def summarise(folder: Path) -> str | None:
+    runs = load_runs(folder)
+    return table(runs) if runs else None
 
 
 if __name__ == "__main__":
-    main()
+    table_main(__doc__, summarise, f"DDPG {METRICS}")

@@ -11,21 +11,18 @@ noise (the run's ``noise_check``).
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
-import sys
 from collections import defaultdict
 from pathlib import Path
 
 from jugglerl.dps.training import METRICS, MILESTONES
 from jugglerl.dps.updates import UPDATES
+from jugglerl.run_tables import markdown_table, run_metrics, table_main
 
 
 def load_runs(folder: Path) -> dict[str, list[dict]]:
     runs = defaultdict(list)
-    for path in sorted(folder.rglob(METRICS)):
-        metrics = json.loads(path.read_text())
+    for metrics in run_metrics(folder, METRICS):
         if "update" in metrics:  # DPS runs only
             runs[metrics["update"]].append(metrics)
     return runs
@@ -42,7 +39,7 @@ def milestone_cell(runs: list[dict], throws: int) -> str:
 def table(runs: dict[str, list[dict]]) -> str:
     header = ["update", "seeds", "best throws: median (per seed)"]
     header += [f"roll-outs to {n}" for n in MILESTONES] + ["kept with start noise"]
-    lines = ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)]
+    rows = []
     for update in sorted(runs, key=lambda name: UPDATES.index(name)):
         group = sorted(runs[update], key=lambda r: r["seed"])
         best = [r["best_throws"] for r in group]
@@ -54,19 +51,14 @@ def table(runs: dict[str, list[dict]]) -> str:
             *[milestone_cell(group, n) for n in MILESTONES],
             f"{statistics.mean(kept):.0%}" if kept else "—",
         ]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+        rows.append(cells)
+    return markdown_table(header, rows)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("folder", type=Path, help="a multirun folder (or any folder of runs)")
-    args = parser.parse_args()
-    runs = load_runs(args.folder)
-    if not runs:
-        sys.exit(f"error: no DPS {METRICS} below {args.folder}")
-    print(table(runs))
+def summarise(folder: Path) -> str | None:
+    runs = load_runs(folder)
+    return table(runs) if runs else None
 
 
 if __name__ == "__main__":
-    main()
+    table_main(__doc__, summarise, f"DPS {METRICS}")
