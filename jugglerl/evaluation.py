@@ -86,19 +86,12 @@ def caught(metrics: EpisodeMetrics, catch_time: float) -> bool:
     return metrics.catches >= 1 and metrics.duration >= catch_time
 
 
-def evaluate_policy(
-    env: gym.Env, policy: Policy, seeds: list[int], catch_time: float
-) -> tuple[list[EpisodeMetrics], dict[str, float]]:
-    """One episode per seed, and their summary.
-
-    The summary has ``catch_rate`` (fraction ``caught``), ``mean_throws``, ``mean_catches`` and
-    ``mean_time_to_drop`` (s; an episode that kept the ball counts its full duration).
-    """
-    episodes = [run_episode(env, policy, seed=seed) for seed in seeds]
-    summary = {
+def summarise_episodes(episodes: list[EpisodeMetrics], catch_time: float) -> dict[str, float]:
+    """``catch_rate`` (fraction ``caught``), ``mean_throws``, ``mean_catches`` and
+    ``mean_time_to_drop`` (s; an episode that kept the ball counts its full duration)."""
+    return {
         "catch_rate": float(np.mean([caught(m, catch_time) for m in episodes])),
         "mean_throws": float(np.mean([m.throws for m in episodes])),
         "mean_catches": float(np.mean([m.catches for m in episodes])),
         "mean_time_to_drop": float(np.mean([m.duration for m in episodes])),
     }
-    return episodes, summary

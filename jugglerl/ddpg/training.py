@@ -36,7 +36,7 @@ from jugglerl.ddpg.env_stack import ACTION_SIZE, make_env, normalisation, observ
 from jugglerl.ddpg.exploration import make_exploration
 from jugglerl.ddpg.policy import ActorPolicy
 from jugglerl.ddpg.update import DDPGUpdate
-from jugglerl.evaluation import evaluate_policy, run_episode
+from jugglerl.evaluation import run_episode, summarise_episodes
 from jugglerl.recording.blueprint import juggling_blueprint
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
@@ -209,24 +209,31 @@ class DDPGTraining:
         return ActorPolicy(self.deployed_actor(), transforms)
 
     def evaluate(self, logger: RerunLogger, duration: float) -> dict:
-        """Deterministic episodes of ``duration`` s from env seeds ``0..eval.seeds-1``."""
+        """Deterministic episodes of ``duration`` s from env seeds ``0..eval.seeds-1``; with
+        ``eval.record`` the first is recorded under ``eval/<frames>``."""
         check = self.cfg.eval
         policy = self.actor_policy()
         seeds = list(range(check.seeds))
-        episodes, summary = evaluate_policy(
-            make_juggle_env(self.cfg.env, duration=duration), policy, seeds, check.catch_time
-        )
+        envs = [make_juggle_env(self.cfg.env, duration=duration)] * len(seeds)
+        root = join(EVAL, f"{self.frames:08d}")
+        if check.record:
+            envs[0] = EpisodeRecorder(
+                make_juggle_env(self.cfg.env, duration=duration),
+                logger.recording,
+                root,
+                self.cfg.logger.scene_fps,
+            )
+        episodes = [
+            run_episode(env, policy, seed=seed) for env, seed in zip(envs, seeds, strict=True)
+        ]
+        if check.record:
+            envs[0].close()  # sends the recorded episode
+            logger.send_blueprint(juggling_blueprint(root, metric_groups=[TRAIN, EVAL]))
+        summary = summarise_episodes(episodes, check.catch_time)
         record = {"frames": self.frames, "duration": duration, **summary}
         record["episodes"] = [episode.to_dict() for episode in episodes]
         self.evaluations.append(record)
         logger.log_metrics({join(EVAL, key): value for key, value in summary.items()}, self.frames)
-        if check.record:
-            root = join(EVAL, f"{self.frames:08d}")
-            env = make_juggle_env(self.cfg.env, duration=duration)
-            recorder = EpisodeRecorder(env, logger.recording, root, self.cfg.logger.scene_fps)
-            run_episode(recorder, policy, seed=seeds[0])
-            recorder.close()
-            logger.send_blueprint(juggling_blueprint(root, metric_groups=[TRAIN, EVAL]))
         return record
 
     # --- checkpoints ----------------------------------------------------------------------
