@@ -19,10 +19,13 @@ from __future__ import annotations
 import argparse
 import copy
 import statistics
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import torch
+from hydra import compose, initialize_config_dir
 from torchrl.collectors import Collector
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
@@ -161,16 +164,18 @@ def main() -> None:
     parser.add_argument("--updates", type=int, default=300, help="updates per update timing")
     parser.add_argument("--repeats", type=int, default=3)
     args, overrides = parser.parse_known_args()
-    from pathlib import Path
-
-    from hydra import compose, initialize_config_dir
-
     configs = Path(__file__).resolve().parents[1] / "configs"
     with initialize_config_dir(str(configs), version_base="1.3"):
         cfg = compose("train", overrides=["actor=mlp", "exploration=gaussian", *overrides])
     torch.set_num_threads(1)  # the collector and the bare loop each run on one core
-    training = DDPGTraining(cfg, Path("/tmp/unused"))  # its env stack, actor and exploration
+    with tempfile.TemporaryDirectory() as run_dir:  # the run writes nothing; it lends its parts
+        training = DDPGTraining(cfg, run_dir)  # env stack, actor, exploration, update
+        measure(training, cfg, args)
+        training.close()
 
+
+def measure(training: DDPGTraining, cfg, args: argparse.Namespace) -> None:
+    """Print the update timings, the collection rates and, last, the collection ratio."""
     ours_update, bare_update = bench_updates(training, cfg, args.updates, args.repeats)
     print(
         f"DDPG update, batch {cfg.replay_buffer.batch_size}: ours {ours_update * 1e3:.2f} ms,"
@@ -184,7 +189,6 @@ def main() -> None:
         f" TorchRL collector {ours:,.0f} env steps/s"
     )
     print(f"ratio {ours / bare:.2f} (target >= 0.5)")
-    training.close()
 
 
 if __name__ == "__main__":
