@@ -65,14 +65,19 @@ def make_actor(actor_cfg: DictConfig, observation_size: int, action_spec: Tensor
     )
 
 
+def actor_lstm(actor: TensorDictSequential) -> LSTMModule | None:
+    """The actor's LSTM (``None`` for an MLP)."""
+    return next((m for m in actor.module if isinstance(m, LSTMModule)), None)
+
+
 def lstm_primer(actor: TensorDictSequential) -> Transform | None:
     """The env transform that adds the LSTM's zero states on reset (``None`` for an MLP)."""
-    lstm = next((m for m in actor.module if isinstance(m, LSTMModule)), None)
+    lstm = actor_lstm(actor)
     return None if lstm is None else lstm.make_tensordict_primer()
 
 
 def is_recurrent(actor: TensorDictSequential) -> bool:
-    return lstm_primer(actor) is not None
+    return actor_lstm(actor) is not None
 
 
 def make_critic(critic_cfg: DictConfig, observation_size: int, action_size: int) -> TensorModule:

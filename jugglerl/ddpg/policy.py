@@ -16,9 +16,8 @@ from tensordict.nn import TensorDictSequential
 from torchrl.data import Bounded
 from torchrl.envs import Transform
 from torchrl.envs.utils import ExplorationType, set_exploration_type
-from torchrl.modules import LSTMModule
 
-from jugglerl.ddpg.actors import make_actor
+from jugglerl.ddpg.actors import actor_lstm, make_actor
 from jugglerl.ddpg.env_stack import ACTION_SIZE, OBSERVATION_SIZE, observation_transforms
 from jugglerl.ddpg.timestamp import NUM_TIME_FEATURES
 
@@ -29,7 +28,7 @@ class ActorPolicy:
     def __init__(self, actor: TensorDictSequential, transforms: list[Transform]):
         self.actor = actor
         self.transforms = transforms
-        self._lstm = next((m for m in actor.module if isinstance(m, LSTMModule)), None)
+        self._lstm = actor_lstm(actor)
         self._memory: TensorDict | None = None
 
     @classmethod
