@@ -30,6 +30,10 @@ before integrating), 2 ms older than the joint and ball states at the default ti
 - ``distance``: inverse cup–ball distance, bounded: ``min(1, 0.05 m / distance)``
   (paper's reward 2).
 - ``contacts``: number of ball–arm contacts (arm links and cup plates) after the step (reward 3).
+- ``juggle`` (ours, for closed-loop juggling): the throws plus a small dense centring term,
+  ``0.01 · max(0, 1 - d / 0.1 m)`` with ``d`` the ball's horizontal distance from the cup. It
+  pays for keeping the cup under the ball, in the cup and in flight, without paying for holding
+  the ball (as ``distance`` does), and a drop ends the stream of it.
 
 ## Start state
 Arm at ``home`` (pan, lift, elbow) with the wrist at ``wrist_angles``, at rest; the ball at rest
@@ -43,7 +47,13 @@ warning: ``info["physics_error"]`` says which; the env never raises). Truncated 
 ## Info
 ``throws``, ``catches``, ``max_consecutive_catches`` (episode totals), ``ball_height`` (m),
 ``in_cup`` (bool), ``peak_joint_speed`` (episode maximum of each actuated joint's speed, rad/s,
-sampled every env step), ``time`` (s), ``physics_error`` ("" when fine).
+sampled every env step), ``time`` (s), ``kicks`` (ball kicks so far), ``physics_error`` ("" when
+fine).
+
+## Perturbations (for robustness tests; off by default, see ``jugglerl_envs.perturbations``)
+``reset_noise`` (ball start offset), ``ball_mass``, ``ball_radius``, ``servo_gain`` (scales the
+arm servos' kp), ``kick_rate`` and ``kick_speed`` (random horizontal velocity kicks of the
+ball in free flight, per second and in m/s).
 """
 
 from __future__ import annotations
@@ -57,11 +67,14 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from jugglerl_envs import scene
 from jugglerl_envs.events import JuggleEvents
+from jugglerl_envs.perturbations import BallKicks, scale_servo_gains
 from jugglerl_envs.validation import check_choice, check_number, check_vector
 
-REWARDS = ("throws", "distance", "contacts")
+REWARDS = ("throws", "distance", "contacts", "juggle")
 DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
 DISTANCE_SCALE = 0.05  # m: the distance reward is 1 within this distance of the cup
+CENTRING_SCALE = 0.1  # m: the juggle reward's centring term is 0 this far off the cup's axis
+CENTRING_WEIGHT = 0.01  # per step: 0.5 per second of a centred ball, about one throw's worth
 PAPER_HOME = (0.0, -1.5708, 2.15)  # rad: the paper preset (configs/env/paper.yaml)
 PAPER_WRIST = (-2.0, 1.5708, 0.0)
 
@@ -83,6 +96,9 @@ class JuggleEnv(MujocoEnv):
         ball_mass: float = 0.1,
         reset_noise: float = 0.0,
         joint_speed_limit: float | None = None,
+        servo_gain: float = 1.0,
+        kick_rate: float = 0.0,
+        kick_speed: float = 0.0,
         drop_height: float = 0.5,
         home: tuple[float, float, float] = PAPER_HOME,
         wrist_angles: tuple[float, float, float] = PAPER_WRIST,
@@ -105,6 +121,10 @@ class JuggleEnv(MujocoEnv):
             if joint_speed_limit is None
             else check_number("joint_speed_limit", joint_speed_limit, 0.0, 100.0, low_open=True)
         )
+        self.servo_gain = check_number("servo_gain", servo_gain, 0.0, 10.0, low_open=True)
+        self.kick_rate = check_number("kick_rate", kick_rate, 0.0, 100.0)
+        self.kick_speed = check_number("kick_speed", kick_speed, 0.0, 10.0)
+        self._kicks = BallKicks(self.kick_rate, self.kick_speed)
         self.drop_height = check_number("drop_height", drop_height, 0.0, 2.0)
         self.home = np.array(check_vector("home", home, 3, -2 * math.pi, 2 * math.pi))
         self.wrist_angles = np.array(
@@ -132,6 +152,7 @@ class JuggleEnv(MujocoEnv):
     # --- set-up -----------------------------------------------------------------------------
     def _initialize_simulation(self):
         model = scene.load_model(self.gravity, self.timestep, self.ball_radius, self.ball_mass)
+        scale_servo_gains(model, slice(0, len(scene.ACTUATED_JOINTS)), self.servo_gain)
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
         return model, mujoco.MjData(model)
@@ -188,6 +209,7 @@ class JuggleEnv(MujocoEnv):
         mujoco.mj_forward(self.model, self.data)
 
         self._steps = 0
+        self._kick_count = 0
         self._setpoint = self.data.ctrl[:3].copy()
         self._peak_joint_speed = np.zeros(3)
         self._measure_ball_in_cup()
@@ -202,6 +224,7 @@ class JuggleEnv(MujocoEnv):
         target = self.action_to_ctrl(np.asarray(action, dtype=np.float64))
         self._simulate(target)
         self._steps += 1
+        self._kick_ball()
         self._physics_error = self._check_physics()
 
         height = self._ball_height()
@@ -232,6 +255,20 @@ class JuggleEnv(MujocoEnv):
             self._setpoint += np.clip(target - self._setpoint, -max_change, max_change)
             self.data.ctrl[:3] = self._setpoint
             mujoco.mj_step(self.model, self.data)
+
+    @property
+    def kicks_ball(self) -> bool:
+        """Whether this env kicks the ball in flight (``kick_rate`` and ``kick_speed`` > 0)."""
+        return self._kicks.active
+
+    def _kick_ball(self) -> None:
+        """Maybe kick the ball, if it is in free flight (``kick_rate``, ``kick_speed``)."""
+        if not self._kicks.active or not self._ball_in_flight():
+            return
+        kick = self._kicks.draw(self.np_random, self.dt)
+        if kick is not None:
+            self.data.qvel[self._ball_qvel : self._ball_qvel + 3] += kick
+            self._kick_count += 1
 
     def _check_physics(self) -> str:
         """Name of the first MuJoCo warning raised this episode, or of a NaN state; "" if none."""
@@ -291,7 +328,15 @@ class JuggleEnv(MujocoEnv):
             ball = self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
             distance = np.linalg.norm(ball - self.data.site_xpos[self._cup_site])
             return float(min(1.0, DISTANCE_SCALE / max(distance, 1e-9)))
-        return float(self._ball_arm_contacts())
+        if self.reward_kind == "contacts":
+            return float(self._ball_arm_contacts())
+        return throws + CENTRING_WEIGHT * self._centring()
+
+    def _centring(self) -> float:
+        """1 with the ball straight above (or below) the cup, falling to 0 at ``CENTRING_SCALE``."""
+        ball = self.data.qpos[self._ball_qpos : self._ball_qpos + 2]
+        offset = np.linalg.norm(ball - self.data.site_xpos[self._cup_site, :2])
+        return max(0.0, 1.0 - offset / CENTRING_SCALE)
 
     def _get_obs(self) -> np.ndarray:
         d = self.data
@@ -315,5 +360,6 @@ class JuggleEnv(MujocoEnv):
             "in_cup": bool(self._in_cup),
             "peak_joint_speed": self._peak_joint_speed.copy(),
             "time": float(self.data.time),
+            "kicks": self._kick_count,
             "physics_error": self._physics_error,
         }

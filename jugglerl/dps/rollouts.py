@@ -51,6 +51,11 @@ class CommandRollouts:
 
     def __init__(self, env: JuggleEnv, nthread: int | None = None):
         self.env = env.unwrapped
+        if self.env.kicks_ball:
+            raise ValueError(
+                "env.kick_rate/kick_speed: DPS roll-outs run open loop in C and cannot kick the"
+                " ball; set them to 0 for DPS (evaluate kicks with scripts/robustness.py)"
+            )
         self.nthread = nthread or os.cpu_count() or 1
         self.frame_skip = self.env.frame_skip
         self.n_env_steps = max(1, round(self.env.duration / self.env.dt))
