@@ -17,6 +17,7 @@ from jugglerl.ddpg.buffer import ReplayBuffer
 from jugglerl.ddpg.env_stack import make_env, normalisation, observation_transforms
 from jugglerl.ddpg.exploration import ExpertCentre, ExpertGaussianNoise, make_exploration
 from jugglerl.ddpg.policy import ActorPolicy
+from jugglerl.ddpg.reference import CommandReference
 from jugglerl.ddpg.timestamp import TimestampFeatures, time_features
 from jugglerl.ddpg.update import DDPGUpdate
 from jugglerl_envs import JuggleEnv
@@ -29,7 +30,8 @@ def stack(*overrides: str):
     cfg = train_config(*SMALL, *overrides)
     torch.manual_seed(0)
     env = make_env(cfg, cfg.collector.num_envs)
-    actor = make_actor(cfg.actor, env.observation_spec["observation"].shape[-1], env.action_spec)
+    observation_size = env.observation_spec["observation"].shape[-1]
+    actor = make_actor(cfg.actor, observation_size, env.action_spec, JuggleEnv().ctrl_to_action)
     primer = lstm_primer(actor)
     if primer is not None:
         env.append_transform(primer)
@@ -198,7 +200,7 @@ def test_lstm_actor_gives_the_same_actions_step_by_step_and_in_recurrent_mode():
     torch.testing.assert_close(replay["action"], data["action"], atol=1e-5, rtol=0)
 
 
-@pytest.mark.parametrize("actor_name", ["mlp", "lstm"])
+@pytest.mark.parametrize("actor_name", ["mlp", "lstm", "residual"])
 def test_actor_policy_acts_as_the_actor_does_in_the_env_stack(actor_name):
     cfg, env, actor = stack(f"actor={actor_name}", "collector.num_envs=1")
     with set_exploration_type(ExplorationType.DETERMINISTIC), torch.no_grad():
@@ -223,6 +225,49 @@ def test_unknown_actor_is_named():
     cfg.actor.name = "gru"
     with pytest.raises(ValueError, match="actor=gru is not available; choose one of mlp, lstm"):
         make_actor(cfg.actor, 21, Bounded(-1.0, 1.0, shape=(3,)))
+
+
+# --- residual actor -----------------------------------------------------------------------------
+def test_command_reference_is_the_commands_action_at_each_time():
+    env, command = JuggleEnv(), load_command("dps_best")
+    reference = CommandReference(command, env.ctrl_to_action)
+    times = torch.linspace(0.0, 3 * command.cycle, 1001, dtype=torch.float64)
+    expected = env.ctrl_to_action(command.setpoints(times.numpy()))
+    np.testing.assert_allclose(reference(times).numpy(), expected, atol=1e-6)
+    assert reference(times.reshape(7, 143)).shape == (7, 143, 3)
+
+
+def residual_actor(**settings):
+    cfg = train_config("actor=residual", *(f"actor.{k}={v}" for k, v in settings.items()))
+    env = JuggleEnv()
+    actor = make_actor(cfg.actor, 18, Bounded(-1.0, 1.0, shape=(3,)), env.ctrl_to_action)
+    reference = CommandReference(load_command(cfg.actor.command), env.ctrl_to_action)
+    torch.manual_seed(0)
+    data = TensorDict(
+        {"observation": 3 * torch.randn(500, 18), "time": 10 * torch.rand(500)}, batch_size=[500]
+    )
+    return actor, reference(data["time"]), data
+
+
+def test_an_untrained_residual_actor_plays_its_command():
+    actor, reference, data = residual_actor()
+    torch.testing.assert_close(actor(data)["action"], reference)
+
+
+def test_the_residual_correction_is_bounded_by_max_correction():
+    actor, reference, data = residual_actor(max_correction=0.2)
+    with torch.no_grad():
+        for parameter in actor.parameters():
+            parameter.normal_(0.0, 1.0)
+    correction = (actor(data)["action"] - reference).abs()
+    inside = (reference.abs() < 0.75).all(-1)  # away from the [-1, 1] clip
+    assert correction.max() <= 0.2 + 1e-6
+    assert correction[inside].max() > 0.19  # the bound is reached, not just respected
+
+
+def test_a_bad_max_correction_is_named():
+    with pytest.raises(ValueError, match="actor.max_correction=0 must be in"):
+        residual_actor(max_correction=0)
 
 
 # --- update -------------------------------------------------------------------------------------

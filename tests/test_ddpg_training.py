@@ -41,7 +41,7 @@ def train(cfg, run_dir, state=None) -> tuple[dict, DDPGTraining]:
     return metrics, training
 
 
-@pytest.mark.parametrize("actor", ["mlp", "lstm"])
+@pytest.mark.parametrize("actor", ["mlp", "lstm", "residual"])
 def test_a_smoke_run_writes_a_checkpoint_that_resumes(tmp_path, actor):
     cfg = train_config(*TINY, f"actor={actor}")
     metrics, training = train(cfg, tmp_path)

@@ -21,6 +21,7 @@ from torchrl.envs.utils import ExplorationType, exploration_type
 from torchrl.modules import OrnsteinUhlenbeckProcessModule
 
 from jugglerl.commands import ViaPointCommand, load_command
+from jugglerl.ddpg.reference import CommandReference
 
 EXPLORATIONS = ("ou", "gaussian")
 CENTRES = ("timed", "average")
@@ -46,7 +47,7 @@ class ExpertCentre:
             raise ValueError(f"exploration.centre={mode} is not one of {', '.join(CENTRES)}")
         self.command = command
         self.mode = mode
-        self._to_action = to_action
+        self.reference = CommandReference(command, to_action)
         times = np.linspace(0.0, command.cycle, AVERAGE_SAMPLES, endpoint=False)
         self.average = torch.as_tensor(to_action(command.setpoints(times)).mean(axis=0))
 
@@ -54,8 +55,7 @@ class ExpertCentre:
         """Actions of shape ``time.shape + (3,)`` for episode times in seconds."""
         if self.mode == "average":
             return self.average.expand(*time.shape, -1)
-        setpoints = self.command.setpoints(time.detach().cpu().double().numpy())
-        return torch.as_tensor(self._to_action(setpoints))
+        return self.reference(time)
 
 
 def _interpolate(start: float, end: float, progress: float) -> float:

@@ -17,6 +17,7 @@ from torchrl.data import Bounded
 from torchrl.envs import Transform
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
+from jugglerl.config import action_mapping
 from jugglerl.ddpg.actors import actor_lstm, make_actor
 from jugglerl.ddpg.env_stack import ACTION_SIZE, OBSERVATION_SIZE, observation_transforms
 from jugglerl.ddpg.timestamp import NUM_TIME_FEATURES
@@ -42,7 +43,8 @@ class ActorPolicy:
             state["normalisation"]["scale"],
         )
         observation_size = OBSERVATION_SIZE + (NUM_TIME_FEATURES if cfg.state.timestamp else 0)
-        actor = make_actor(cfg.actor, observation_size, Bounded(-1.0, 1.0, shape=(ACTION_SIZE,)))
+        action_spec = Bounded(-1.0, 1.0, shape=(ACTION_SIZE,))
+        actor = make_actor(cfg.actor, observation_size, action_spec, action_mapping(cfg.env))
         actor.load_state_dict(state["policy"])
         return cls(actor, transforms)
 

@@ -29,7 +29,7 @@ from torchrl.collectors import Collector
 from tqdm import tqdm
 
 from jugglerl.checkpoints import CHECKPOINT, save_checkpoint
-from jugglerl.config import make_juggle_env
+from jugglerl.config import action_mapping, make_juggle_env
 from jugglerl.ddpg.actors import is_recurrent, lstm_primer, make_actor, make_critic
 from jugglerl.ddpg.buffer import ReplayBuffer
 from jugglerl.ddpg.env_stack import ACTION_SIZE, make_env, normalisation, observation_transforms
@@ -57,12 +57,12 @@ class DDPGTraining:
         norm = state["normalisation"] if state is not None else {"loc": None, "scale": None}
         self.env = make_env(cfg, cfg.collector.num_envs, norm["loc"], norm["scale"])
         observation_size = self.env.observation_spec["observation"].shape[-1]
-        self.actor = make_actor(cfg.actor, observation_size, self.env.action_spec)
+        to_action = action_mapping(cfg.env)
+        self.actor = make_actor(cfg.actor, observation_size, self.env.action_spec, to_action)
         primer = lstm_primer(self.actor)
         if primer is not None:
             self.env.append_transform(primer)
         critic = make_critic(cfg.critic, observation_size, ACTION_SIZE)
-        to_action = make_juggle_env(cfg.env).unwrapped.ctrl_to_action
         self.policy, self.noise = make_exploration(
             cfg.exploration, self.actor, self.env.action_spec, to_action
         )
