@@ -21,8 +21,13 @@ def train_config(*overrides: str):
 
 def run_train(*overrides: str, timeout: float = 300) -> subprocess.CompletedProcess:
     """``python scripts/train.py *overrides`` to completion."""
+    return run_script("train.py", *overrides, timeout=timeout)
+
+
+def run_script(name: str, *overrides: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    """``python scripts/<name> *overrides`` to completion."""
     return subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "train.py"), *overrides],
+        [sys.executable, str(ROOT / "scripts" / name), *overrides],
         capture_output=True,
         text=True,
         cwd=ROOT,

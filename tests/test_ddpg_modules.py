@@ -336,3 +336,9 @@ def test_replay_buffer_rejects_a_batch_that_is_not_whole_slices():
         ValueError, match="batch_size=100 must be a multiple of replay_buffer.slice_len=16"
     ):
         ReplayBuffer(1000, 100, slice_len=16)
+
+
+def test_the_residual_experiment_composes_its_groups():
+    cfg = train_config("+experiment=residual")
+    assert (cfg.actor.name, cfg.env.reward, cfg.state.timestamp) == ("residual", "juggle", False)
+    assert cfg.env.kick_rate > 0 and cfg.env.reset_noise > 0

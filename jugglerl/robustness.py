@@ -1,0 +1,291 @@
+"""How juggling policies hold up when the world is not as planned.
+
+Each *perturbation family* varies one env argument (``jugglerl_envs.perturbations``): the ball's
+start offset, its mass, its radius, the arm servos' gain, the speed of random kicks of the ball in
+flight. ``measure`` runs every policy (open-loop commands and trained checkpoints alike, through
+``load_policy``) for ``seeds`` episodes at the nominal env and at each magnitude of each family,
+in worker processes; ``summarise`` turns the episodes into rows of mean throws, fraction of the
+policy's own nominal throws and time to drop, and ``breaking_points`` finds, per family, the first
+magnitude where a reference open-loop policy falls below a fraction of its nominal, and what the
+others keep there. ``markdown``/``plot`` render them for the README and the run directory.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Mapping
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+
+from jugglerl.config import make_juggle_env
+from jugglerl.evaluation import Policy, run_episode
+from jugglerl.policies import load_policy
+
+NOMINAL = "nominal"
+
+
+@dataclass(frozen=True)
+class Family:
+    """Perturbations that set env argument ``key`` to each of ``magnitudes`` (in ``unit``), with
+    ``fixed`` env arguments alongside (e.g. the kick rate for kick speeds); ``nominal`` is the
+    key's value in the unperturbed env."""
+
+    name: str
+    key: str
+    magnitudes: tuple[float, ...]
+    nominal: float
+    unit: str = ""
+    fixed: Mapping[str, float] = field(default_factory=dict)
+
+    def overrides(self, magnitude: float) -> dict[str, float]:
+        return {**self.fixed, self.key: magnitude}
+
+
+def families_from_config(
+    cfg: DictConfig, env_cfg: DictConfig, select: Iterable[str] = ()
+) -> list[Family]:
+    """Families from the ``families`` mapping of ``configs/robustness.yaml`` (only those named in
+    ``select``, when it is not empty) on the env of ``env_cfg``."""
+    select = list(select)
+    unknown = set(select) - set(cfg)
+    if unknown:
+        raise ValueError(f"select={sorted(unknown)}: no such families; valid: {', '.join(cfg)}")
+    families = []
+    for name, family in cfg.items():
+        if select and name not in select:
+            continue
+        unknown = set(family) - {"key", "magnitudes", "unit", "fixed"}
+        if unknown or "key" not in family or not family.get("magnitudes"):
+            raise ValueError(
+                f"families.{name}: needs key and a non-empty magnitudes list (and optional unit,"
+                f" fixed); got {sorted(family)}"
+            )
+        if family.key not in env_cfg:
+            raise ValueError(f"families.{name}.key={family.key} is not an env argument")
+        families.append(
+            Family(
+                name=str(name),
+                key=str(family.key),
+                magnitudes=tuple(float(m) for m in family.magnitudes),
+                nominal=float(env_cfg[family.key]),
+                unit=str(family.get("unit", "")),
+                fixed=dict(family.get("fixed") or {}),
+            )
+        )
+    return families
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One env setting: ``nominal`` or a family at a magnitude."""
+
+    family: str
+    magnitude: float | None
+    overrides: Mapping[str, float]
+
+
+def conditions(families: Iterable[Family]) -> list[Condition]:
+    """The nominal condition, then every family at each of its magnitudes."""
+    found = [Condition(NOMINAL, None, {})]
+    for family in families:
+        found += [Condition(family.name, m, family.overrides(m)) for m in family.magnitudes]
+    return found
+
+
+# --- episodes, in worker processes -------------------------------------------------------------
+_worker_env_cfg: DictConfig | None = None
+_worker_policies: dict[str, Policy] = {}
+
+
+def _start_worker(env_cfg: dict) -> None:
+    global _worker_env_cfg
+    _worker_env_cfg = OmegaConf.create(env_cfg)
+    try:  # one thread per worker: the workers are the parallelism
+        import torch
+
+        torch.set_num_threads(1)
+    except ImportError:  # pragma: no cover - torch is a dependency
+        pass
+
+
+def _run(task: tuple[str, dict, int, float]) -> tuple[int, float, bool]:
+    """(throws, seconds the ball stayed up, dropped) of one episode."""
+    spec, overrides, seed, duration = task
+    env = make_juggle_env(_worker_env_cfg, duration=duration, **overrides)
+    if spec not in _worker_policies:
+        _worker_policies[spec] = load_policy(spec, env)
+    metrics = run_episode(env, _worker_policies[spec], seed=seed)
+    env.close()
+    return metrics.throws, metrics.duration, metrics.time_to_drop is not None
+
+
+def check_policies(policies: Iterable[str], env_cfg: DictConfig) -> None:
+    """Load each policy once here, so that a bad name fails before any work (``ValueError``)."""
+    env = make_juggle_env(env_cfg)
+    for spec in policies:
+        load_policy(spec, env)
+    env.close()
+
+
+def measure(
+    policies: list[str],
+    env_cfg: DictConfig,
+    families: list[Family],
+    seeds: int,
+    duration: float,
+    workers: int = 0,
+    on_episode: Callable[[], None] | None = None,
+) -> list[dict]:
+    """Episodes of every policy under every condition, env seeds ``0..seeds-1``.
+
+    Returns one record per (policy, condition): ``policy``, ``family``, ``magnitude``,
+    ``throws`` and ``seconds_up`` (lists over seeds). ``workers`` processes (0: all cores);
+    ``on_episode`` is called as each episode finishes (progress bars).
+    """
+    if seeds < 1:
+        raise ValueError(f"seeds={seeds} must be >= 1")
+    check_policies(policies, env_cfg)
+    plan = [(spec, condition) for condition in conditions(families) for spec in policies]
+    tasks = [
+        (spec, dict(condition.overrides), seed, duration)
+        for spec, condition in plan
+        for seed in range(seeds)
+    ]
+    workers = workers or os.cpu_count() or 1
+    env_dict = OmegaConf.to_container(env_cfg, resolve=True)
+    with ProcessPoolExecutor(workers, initializer=_start_worker, initargs=(env_dict,)) as pool:
+        results = []
+        for result in pool.map(_run, tasks, chunksize=1):
+            results.append(result)
+            if on_episode is not None:
+                on_episode()
+    records = []
+    for index, (spec, condition) in enumerate(plan):
+        episodes = results[index * seeds : (index + 1) * seeds]
+        records.append(
+            {
+                "policy": spec,
+                "family": condition.family,
+                "magnitude": condition.magnitude,
+                "throws": [throws for throws, _, _ in episodes],
+                "seconds_up": [seconds for _, seconds, _ in episodes],
+            }
+        )
+    return records
+
+
+# --- summaries --------------------------------------------------------------------------------
+def summarise(records: list[dict]) -> list[dict]:
+    """Rows with ``mean_throws``, ``fraction_of_nominal`` (of the policy's own nominal mean
+    throws; ``None`` when that is 0) and ``mean_seconds_up`` (time to drop; a kept ball counts
+    the whole episode)."""
+    nominal = {
+        r["policy"]: float(np.mean(r["throws"])) for r in records if r["family"] == NOMINAL
+    }
+    rows = []
+    for record in records:
+        mean_throws = float(np.mean(record["throws"]))
+        base = nominal[record["policy"]]
+        rows.append(
+            {
+                "policy": record["policy"],
+                "family": record["family"],
+                "magnitude": record["magnitude"],
+                "mean_throws": mean_throws,
+                "fraction_of_nominal": mean_throws / base if base > 0 else None,
+                "mean_seconds_up": float(np.mean(record["seconds_up"])),
+            }
+        )
+    return rows
+
+
+def breaking_points(rows: list[dict], reference: str, fraction: float) -> list[dict]:
+    """Per family, the first magnitude where ``reference`` keeps under ``fraction`` of its
+    nominal throws, with every policy's fraction there; families where it never breaks are
+    left out."""
+    points = []
+    for family in dict.fromkeys(r["family"] for r in rows if r["family"] != NOMINAL):
+        at = [r for r in rows if r["family"] == family]
+        broken = [
+            r["magnitude"]
+            for r in at
+            if r["policy"] == reference
+            and r["fraction_of_nominal"] is not None
+            and r["fraction_of_nominal"] < fraction
+        ]
+        if not broken:
+            continue
+        kept = {r["policy"]: r["fraction_of_nominal"] for r in at if r["magnitude"] == broken[0]}
+        points.append({"family": family, "magnitude": broken[0], "kept": kept})
+    return points
+
+
+def _percent(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.0%}"
+
+
+def markdown(rows: list[dict], families: list[Family], points: list[dict]) -> str:
+    """The results table (and the breaking points) as Markdown."""
+    units = {family.name: family.unit for family in families}
+    lines = [
+        "| perturbation | magnitude | policy | mean throws | of nominal | ball up (s) |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for row in rows:
+        magnitude = ""
+        if row["magnitude"] is not None:
+            magnitude = f"{row['magnitude']:g} {units[row['family']]}"
+        lines.append(
+            f"| {row['family']} | {magnitude.strip()} | {row['policy']} |"
+            f" {row['mean_throws']:.1f} | {_percent(row['fraction_of_nominal'])} |"
+            f" {row['mean_seconds_up']:.1f} |"
+        )
+    if points:
+        policies = list(points[0]["kept"])
+        lines += [
+            "",
+            "| perturbation | breaks the reference at | " + " | ".join(policies) + " |",
+            "| --- | --- | " + " | ".join("---" for _ in policies) + " |",
+        ]
+        for point in points:
+            magnitude = f"{point['magnitude']:g} {units[point['family']]}".strip()
+            kept = " | ".join(_percent(point["kept"][p]) for p in policies)
+            lines.append(f"| {point['family']} | {magnitude} | {kept} |")
+    return "\n".join(lines) + "\n"
+
+
+def plot(rows: list[dict], families: list[Family], path: Path) -> Path:
+    """Mean throws against magnitude as a PNG: one panel per family, one line per policy from
+    its nominal throws (at the family's nominal value) through each magnitude."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    policies = list(dict.fromkeys(r["policy"] for r in rows))
+    nominal = {r["policy"]: r["mean_throws"] for r in rows if r["family"] == NOMINAL}
+    figure, axes = plt.subplots(
+        1, len(families), figsize=(3.2 * len(families), 3.0), squeeze=False, sharey=True
+    )
+    for axis, family in zip(axes[0], families, strict=True):
+        for policy in policies:
+            points = [(family.nominal, nominal[policy])] + [
+                (r["magnitude"], r["mean_throws"])
+                for r in rows
+                if r["family"] == family.name and r["policy"] == policy
+            ]
+            xs, ys = zip(*sorted(points), strict=True)
+            axis.plot(xs, ys, marker="o", label=policy)
+        axis.set_title(family.name)
+        axis.set_xlabel(f"{family.key} ({family.unit})" if family.unit else family.key)
+        axis.grid(alpha=0.3)
+    axes[0][0].set_ylabel("mean throws")
+    axes[0][-1].legend(fontsize="small")
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+    return path
