@@ -27,7 +27,6 @@ class CommandReference(nn.Module):
     ):
         super().__init__()
         times = np.array([point[0] for point in command.via_points])
-        self.command = command
         self.register_buffer("times", torch.as_tensor(times, dtype=torch.float32))
         actions = to_action(command.setpoints(times))  # the setpoint each via-point holds
         self.register_buffer("actions", torch.as_tensor(actions, dtype=torch.float32))
