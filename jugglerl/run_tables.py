@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 
@@ -22,13 +22,15 @@ def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     return "\n".join(lines)
 
 
-def table_main(doc: str, summarise: Callable[[Path], str | None], what: str) -> None:
-    """Parse ``folder`` from the command line and print ``summarise(folder)``; ``summarise``
-    returns ``None`` when it finds no runs, which ends with one ``error:`` line naming ``what``."""
+def table_main(
+    doc: str, load_runs: Callable[[Path], Mapping], table: Callable[[Mapping], str], what: str
+) -> None:
+    """Parse ``folder`` from the command line and print ``table(load_runs(folder))``; no runs
+    end with one ``error:`` line naming ``what``."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("folder", type=Path, help="a multirun folder (or any folder of runs)")
     args = parser.parse_args()
-    table = summarise(args.folder)
-    if table is None:
+    runs = load_runs(args.folder)
+    if not runs:
         sys.exit(f"error: no {what} below {args.folder}")
-    print(table)
+    print(table(runs))

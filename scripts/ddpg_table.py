@@ -61,10 +61,5 @@ def table(runs: dict[tuple[str, str], list[dict]]) -> str:
     return markdown_table(header, rows)
 
 
-def summarise(folder: Path) -> str | None:
-    runs = load_runs(folder)
-    return table(runs) if runs else None
-
-
 if __name__ == "__main__":
-    table_main(__doc__, summarise, f"DDPG {METRICS}")
+    table_main(__doc__, load_runs, table, f"DDPG {METRICS}")

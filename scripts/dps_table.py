@@ -55,10 +55,5 @@ def table(runs: dict[str, list[dict]]) -> str:
     return markdown_table(header, rows)
 
 
-def summarise(folder: Path) -> str | None:
-    runs = load_runs(folder)
-    return table(runs) if runs else None
-
-
 if __name__ == "__main__":
-    table_main(__doc__, summarise, f"DPS {METRICS}")
+    table_main(__doc__, load_runs, table, f"DPS {METRICS}")
