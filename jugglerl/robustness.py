@@ -203,6 +203,18 @@ def summarise(records: list[dict]) -> list[dict]:
     return rows
 
 
+def throws_lines(rows: list[dict]) -> dict[tuple[str, str], list[float]]:
+    """Per (family, policy), the mean throws at the nominal env then at each magnitude in turn:
+    the lines of the plot and of the recording."""
+    nominal = {r["policy"]: r["mean_throws"] for r in rows if r["family"] == NOMINAL}
+    lines: dict[tuple[str, str], list[float]] = {}
+    for row in rows:
+        if row["family"] != NOMINAL:
+            line = lines.setdefault((row["family"], row["policy"]), [nominal[row["policy"]]])
+            line.append(row["mean_throws"])
+    return lines
+
+
 def breaking_points(rows: list[dict], reference: str, fraction: float) -> list[dict]:
     """Per family, the first magnitude where ``reference`` keeps under ``fraction`` of its
     nominal throws, with every policy's fraction there; families where it never breaks are
@@ -266,20 +278,16 @@ def plot(rows: list[dict], families: list[Family], path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    policies = list(dict.fromkeys(r["policy"] for r in rows))
-    nominal = {r["policy"]: r["mean_throws"] for r in rows if r["family"] == NOMINAL}
+    lines = throws_lines(rows)
     figure, axes = plt.subplots(
         1, len(families), figsize=(3.2 * len(families), 3.0), squeeze=False, sharey=True
     )
     for axis, family in zip(axes[0], families, strict=True):
-        for policy in policies:
-            points = [(family.nominal, nominal[policy])] + [
-                (r["magnitude"], r["mean_throws"])
-                for r in rows
-                if r["family"] == family.name and r["policy"] == policy
-            ]
-            xs, ys = zip(*sorted(points), strict=True)
-            axis.plot(xs, ys, marker="o", label=policy)
+        magnitudes = (family.nominal, *family.magnitudes)
+        for (name, policy), throws in lines.items():
+            if name == family.name:
+                xs, ys = zip(*sorted(zip(magnitudes, throws, strict=True)), strict=True)
+                axis.plot(xs, ys, marker="o", label=policy)
         axis.set_title(family.name)
         axis.set_xlabel(f"{family.key} ({family.unit})" if family.unit else family.key)
         axis.grid(alpha=0.3)

@@ -34,18 +34,11 @@ def log_to_rerun(logger: RerunLogger, rows: list[dict], table: str, plot_path: P
     stream = logger.recording
     stream.log(f"{ROOT}/table", rr.TextDocument(table, media_type="text/markdown"), static=True)
     stream.log(f"{ROOT}/plot", rr.EncodedImage(path=plot_path), static=True)
-    nominal = {r["policy"]: r["mean_throws"] for r in rows if r["family"] == robustness.NOMINAL}
-    for row in rows:
-        if row["family"] == robustness.NOMINAL:
-            continue
-        lines = [r for r in rows if r["family"] == row["family"] and r["policy"] == row["policy"]]
-        index = lines.index(row) + 1  # 0 is the nominal env
-        entity = f"{ROOT}/{row['family']}/{row['policy'].replace('/', '_')}"
-        if index == 1:
-            stream.set_time("magnitude", sequence=0)
-            stream.log(entity, rr.Scalars(nominal[row["policy"]]))
-        stream.set_time("magnitude", sequence=index)
-        stream.log(entity, rr.Scalars(row["mean_throws"]))
+    for (family, policy), throws in robustness.throws_lines(rows).items():
+        entity = f"{ROOT}/{family}/{policy.replace('/', '_')}"
+        for index, value in enumerate(throws):  # index 0 is the nominal env
+            stream.set_time("magnitude", sequence=index)
+            stream.log(entity, rr.Scalars(value))
     stream.disable_timeline("magnitude")
 
 
