@@ -19,18 +19,26 @@ from torchrl.objectives import DDPGLoss, SoftUpdate, ValueEstimators
 
 
 class FlatSoftUpdate(SoftUpdate):
-    """``SoftUpdate`` that moves each network's targets with one ``foreach`` lerp.
+    """``SoftUpdate`` that moves all targets with one ``foreach`` lerp over cached tensor lists.
 
-    TorchRL's version builds ``.data`` views of the parameter TensorDicts on every step, which
-    cost about 0.6 ms per network on this CPU (a tenth of a whole update); the result is the same
+    TorchRL's version walks the parameter TensorDicts (and builds ``.data`` views of them) on
+    every step, which costs about 0.6 ms per network on this CPU, a tenth of a whole update. The
+    leaves are the loss's own parameters and targets, updated in place by the optimisers and by
+    ``load_state_dict``, so the lists gathered once at ``init_`` stay valid. The result is the same
     ``θ' ← θ' + τ (θ - θ')``.
     """
 
+    def init_(self) -> None:
+        super().init_()
+        self._target_leaves, self._source_leaves = [], []
+        for key, source in self._sources.items(include_nested=True, leaves_only=True):
+            key = key if isinstance(key, tuple) else (key,)
+            self._target_leaves.append(self._targets[("target_" + key[0], *key[1:])])
+            self._source_leaves.append(source)
+
     @torch.no_grad()
-    def _step(self, p_source, p_target) -> None:
-        targets = list(p_target.values(include_nested=True, leaves_only=True))
-        sources = list(p_source.values(include_nested=True, leaves_only=True))
-        torch._foreach_lerp_(targets, sources, 1 - self.eps)
+    def step(self) -> None:
+        torch._foreach_lerp_(self._target_leaves, self._source_leaves, 1 - self.eps)
 
 
 class DDPGUpdate:
@@ -65,26 +73,31 @@ class DDPGUpdate:
             weight_decay=optim_cfg.weight_decay,
         )
         self.max_grad_norm = optim_cfg.max_grad_norm
+        self.clipped_groups = [
+            [p for group in optimiser.param_groups for p in group["params"]]
+            for optimiser in (self.actor_optimiser, self.critic_optimiser)
+        ]
         self.recurrent = recurrent
 
     def __call__(self, batch: TensorDictBase) -> dict[str, float]:
         """One update on ``batch``; returns the actor and critic losses before the step."""
         with set_recurrent_mode(self.recurrent):
-            losses = self.loss(batch)
+            # the two halves of DDPGLoss.forward, without packing them into a TensorDict
+            loss_critic, critic_info = self.loss.loss_value(batch)
+            loss_actor, _ = self.loss.loss_actor(batch)
         self.actor_optimiser.zero_grad()
         self.critic_optimiser.zero_grad()
-        (losses["loss_actor"] + losses["loss_value"]).backward()
+        (loss_actor + loss_critic).backward()
         if self.max_grad_norm is not None:
-            for optimiser in (self.actor_optimiser, self.critic_optimiser):
-                params = [p for group in optimiser.param_groups for p in group["params"]]
+            for params in self.clipped_groups:
                 torch.nn.utils.clip_grad_norm_(params, self.max_grad_norm)
         self.actor_optimiser.step()
         self.critic_optimiser.step()
         self.targets.step()
         return {
-            "loss_actor": float(losses["loss_actor"].detach()),
-            "loss_critic": float(losses["loss_value"].detach()),
-            "q_value": float(losses["pred_value"].detach().mean()),
+            "loss_actor": float(loss_actor.detach()),
+            "loss_critic": float(loss_critic.detach()),
+            "q_value": float(critic_info["pred_value"].detach().mean()),
         }
 
     def target_actor(self) -> TensorDictModule:
