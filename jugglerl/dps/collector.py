@@ -20,7 +20,8 @@ The learner refits the distribution from the batch and hands it back with
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import torch
 from tensordict import TensorDict, TensorDictBase
@@ -38,13 +39,16 @@ class DPSCollector(BaseCollector):
     """Samples commands from a search distribution and rolls them out, batch after batch.
 
     Args:
-        rollouts: evaluates commands (owns the env and the thread pool; closed by ``shutdown``).
+        rollouts: evaluates candidates (``evaluate(candidates, seeds)`` gives ``RolloutResults``;
+            it owns the env and the workers, closed by ``shutdown``).
         distribution: the starting search distribution.
-        constraints: projection of samples onto valid commands.
+        constraints: projection of samples onto valid parameters (``project``).
         frames_per_batch: roll-outs per iteration (the paper's N).
         total_frames: roll-out budget; ``-1`` runs until stopped.
         pan: pan angle of every command (not searched), rad.
         seed: seeds the sampling RNG.
+        decode: turns one θ into what ``rollouts`` evaluates; default: the via-point command
+            (``params_to_command`` with ``pan``). ``algo=feedback`` decodes feedback gains.
     """
 
     def __init__(
@@ -57,6 +61,7 @@ class DPSCollector(BaseCollector):
         total_frames: int = -1,
         pan: float = 0.0,
         seed: int = 0,
+        decode: Callable[[torch.Tensor], Any] | None = None,
     ):
         super().__init__()
         if frames_per_batch < 1:
@@ -67,6 +72,7 @@ class DPSCollector(BaseCollector):
         self.frames_per_batch = self.requested_frames_per_batch = frames_per_batch
         self.total_frames = total_frames
         self.pan = pan
+        self.decode = decode or (lambda theta: params_to_command(theta, self.pan))
         self.generator = torch.Generator()
         self.set_seed(seed)
         self.iteration = 0
@@ -83,8 +89,8 @@ class DPSCollector(BaseCollector):
             count = min(count, self.total_frames - self.frames)
         params = self.distribution.sample(count, self.generator, self.constraints)
         seeds = torch.randint(SEED_BOUND, (count,), generator=self.generator)
-        commands = [params_to_command(theta, self.pan) for theta in params]
-        results = self.rollouts.evaluate(commands, seeds.tolist())
+        candidates = [self.decode(theta) for theta in params]
+        results = self.rollouts.evaluate(candidates, seeds.tolist())
         throws = torch.as_tensor(results.throws, dtype=torch.int64)
         batch = TensorDict(
             {

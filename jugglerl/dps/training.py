@@ -78,19 +78,7 @@ class DPSTraining:
                 f"algo.elite={algo.elite} must be in [2, algo.rollouts={algo.rollouts}]"
             )
         self.env = make_juggle_env(cfg.env)
-        start = load_command(algo.start)
-        self.pan = start.pan
-        self.constraints = ViaPointConstraints.from_model(
-            self.env.unwrapped.model, algo.min_cycle, algo.max_cycle, algo.min_gap
-        )
-        start_params = command_to_params(start)
-        self.constraints.check(len(start.via_points))
-        problems = self.constraints.violations(start_params)
-        if problems:
-            raise ValueError(
-                f"algo.start={algo.start}: outside the constraints: {'; '.join(problems)}"
-            )
-        stds = component_stds(len(start.via_points), dict(algo.std))
+        start_params, stds, self.constraints, rollouts, decode = self._search_space()
         self.update: UpdateRule = make_update(
             algo["update"],  # item access: DictConfig.update is a method
             stds,
@@ -99,17 +87,38 @@ class DPSTraining:
             min_std_scale=algo.min_std_scale,
         )
         self.collector = DPSCollector(
-            CommandRollouts(self.env, nthread=algo.threads),
+            rollouts,
             SearchDistribution.diagonal(start_params, stds),
             self.constraints,
             frames_per_batch=algo.rollouts,
             total_frames=algo.episodes * algo.rollouts,
             pan=self.pan,
             seed=cfg.seed,
+            decode=decode,
         )
         self.best = BestCommand(start_params)
         self.history: list[dict] = []  # one record per episode
         self.recording_id: str | None = None
+
+    def _search_space(self):
+        """What is searched: the start θ, its stds, the constraints, the roll-outs and how a θ
+        becomes what they evaluate (None: the collector's via-point command). Here: via-point
+        commands from ``algo.start``, rolled out open loop in C."""
+        algo = self.cfg.algo
+        start = load_command(algo.start)
+        self.pan = start.pan
+        constraints = ViaPointConstraints.from_model(
+            self.env.unwrapped.model, algo.min_cycle, algo.max_cycle, algo.min_gap
+        )
+        start_params = command_to_params(start)
+        constraints.check(len(start.via_points))
+        problems = constraints.violations(start_params)
+        if problems:
+            raise ValueError(
+                f"algo.start={algo.start}: outside the constraints: {'; '.join(problems)}"
+            )
+        stds = component_stds(len(start.via_points), dict(algo.std))
+        return start_params, stds, constraints, CommandRollouts(self.env, algo.threads), None
 
     # --- the loop -------------------------------------------------------------------------
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:
@@ -128,7 +137,7 @@ class DPSTraining:
                 improved = self._learn(batch)
                 self._log(logger, self.history[-1])
                 if improved:
-                    save_command(self.best_command(), self.run_dir / BEST_COMMAND)
+                    self.save_best()
                     self._record_best(logger)
                 self.save(self.run_dir / CHECKPOINT)
                 bar.set_postfix(best=self.best.throws, mean=f"{batch['return'].mean():.1f}")
@@ -158,8 +167,7 @@ class DPSTraining:
                 "max_throws": int(batch["throws"].max()),
                 "mean_throws": float(batch["return"].mean()),
                 "dropped_fraction": float(torch.isfinite(batch["time_to_drop"]).double().mean()),
-                "mean_cycle": float(distribution.mean[0]),
-                "std_cycle": float(distribution.stds[0]),
+                **self._distribution_record(distribution),
                 "first_rollout_with": {
                     str(n): first + int(torch.nonzero(batch["throws"] >= n)[0]) + 1
                     for n in MILESTONES
@@ -187,8 +195,7 @@ class DPSTraining:
         recorder = EpisodeRecorder(
             make_juggle_env(self.cfg.env), logger.recording, root, self.cfg.logger.scene_fps
         )
-        command = self.best_command()
-        run_episode(recorder, CommandPolicy(command, recorder), seed=self.best.seed)
+        run_episode(recorder, self.best_policy(recorder), seed=self.best.seed)
         recorder.close()
         logger.send_blueprint(juggling_blueprint(root, metric_groups=[DPS]))
 
@@ -199,11 +206,7 @@ class DPSTraining:
     def summary(self, metrics: dict) -> str:
         """One line on what the run reached."""
         check = metrics.get("noise_check")
-        line = (
-            f"DPS ({self.cfg.algo['update']}): best {metrics['best_throws']} throws in"
-            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} roll-outs"
-            f" (found at roll-out {metrics['best_found_at_rollout']})"
-        )
+        line = self._headline(metrics)
         if check:
             line += (
                 f"; with {check['reset_noise']} m start noise: {check['mean_throws']:.1f} on"
@@ -211,9 +214,28 @@ class DPSTraining:
             )
         return line
 
+    def _headline(self, metrics: dict) -> str:
+        return (
+            f"DPS ({self.cfg.algo['update']}): best {metrics['best_throws']} throws in"
+            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} roll-outs"
+            f" (found at roll-out {metrics['best_found_at_rollout']})"
+        )
+
     # --- results --------------------------------------------------------------------------
+    def _distribution_record(self, distribution: SearchDistribution) -> dict[str, float]:
+        """What the history keeps of the search distribution: its cycle's mean and std."""
+        return {"mean_cycle": float(distribution.mean[0]), "std_cycle": float(distribution.stds[0])}
+
     def best_command(self) -> ViaPointCommand:
         return params_to_command(self.best.params, self.pan, name=f"dps_best_{self.best.throws}")
+
+    def best_policy(self, env) -> CommandPolicy:
+        """The best θ as a policy playing in ``env``."""
+        return CommandPolicy(self.best_command(), env)
+
+    def save_best(self) -> None:
+        """Write the best θ where ``scripts/evaluate.py policy=...`` can replay it."""
+        save_command(self.best_command(), self.run_dir / BEST_COMMAND)
 
     def final_metrics(self) -> dict:
         """Best command, milestones, history, and the best command under reset noise."""
@@ -229,12 +251,15 @@ class DPSTraining:
             "best_time_to_drop": _finite_or_none(self.best.time_to_drop),
             "rollouts": self.collector.frames,
             "first_rollout_with": {n: reached.get(str(n)) for n in MILESTONES},
-            "best_command": self.best_command().to_dict(),
+            **self._best_description(),
             "history": self.history,
         }
         if self.cfg.algo.noise_check.seeds > 0:
             metrics["noise_check"] = self.noise_check()
         return metrics
+
+    def _best_description(self) -> dict:
+        return {"best_command": self.best_command().to_dict()}
 
     def noise_check(self) -> dict:
         """The best command's throws from ``noise_check.seeds`` starts with ball offset noise."""
