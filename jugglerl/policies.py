@@ -8,13 +8,15 @@ import gymnasium as gym
 
 from jugglerl.commands import load_command
 from jugglerl.evaluation import CommandPolicy, Policy
+from jugglerl.feedback import feedback_policy_path, load_feedback_policy
 
 #: File names that mark a trained checkpoint rather than a command file.
 CHECKPOINT_SUFFIX = ".pt"
 
 
 def load_policy(spec: str, env: gym.Env) -> Policy:
-    """A policy from a shipped command name (``expert``), a command file path, or a DDPG
+    """A policy from a shipped name (a command such as ``expert``, or a closed-loop policy of
+    ``assets/policies/`` such as ``closed_loop``), a command or closed-loop policy file, or a DDPG
     checkpoint (a ``.pt`` file, or a run directory holding ``checkpoint.pt``).
 
     Raises ``ValueError`` with a one-line reason when ``spec`` is unusable.
@@ -22,6 +24,9 @@ def load_policy(spec: str, env: gym.Env) -> Policy:
     path = Path(spec)
     if path.suffix == CHECKPOINT_SUFFIX or path.is_dir():
         return _checkpoint_policy(path)
+    feedback = feedback_policy_path(spec)
+    if feedback is not None:
+        return load_feedback_policy(feedback, env)
     return CommandPolicy(load_command(spec), env)
 
 
@@ -33,5 +38,6 @@ def _checkpoint_policy(path: Path) -> Policy:
     state = load_checkpoint(path)
     algo = checkpoint_algo(state)
     if algo != "ddpg":
-        raise ValueError(f"{path} is a {algo} checkpoint; evaluate its best_command.yaml instead")
+        best = "best_policy.yaml" if algo == "feedback" else "best_command.yaml"
+        raise ValueError(f"{path} is a {algo} checkpoint; evaluate its {best} instead")
     return ActorPolicy.from_state(state)

@@ -5,6 +5,7 @@ python scripts/train.py actor=lstm reward=contacts            # LSTM actor, the 
 python scripts/train.py exploration=ou collector.total_frames=100000
 python scripts/train.py algo=dps                              # eREPS from the expert, 500 roll-outs
 python scripts/train.py algo=dps algo.update=greedy seed=1    # the paper's keep-best search
+python scripts/train.py algo=feedback                         # closed loop: eREPS over its gains
 python scripts/train.py resume=outputs/train/<algo>/<run>     # continue from its checkpoint
 python scripts/evaluate.py policy=outputs/train/ddpg/<run>/checkpoint.pt
 python scripts/evaluate.py policy=outputs/train/dps/<run>/best_command.yaml
@@ -23,7 +24,7 @@ from omegaconf import DictConfig, OmegaConf
 from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
 from jugglerl.recording.logger import RerunLogger
 
-ALGOS = ("ddpg", "dps")
+ALGOS = ("ddpg", "dps", "feedback")
 
 
 def resumed_config(cfg: DictConfig, state: dict) -> DictConfig:
@@ -38,10 +39,12 @@ def resumed_config(cfg: DictConfig, state: dict) -> DictConfig:
 
 def make_training(cfg: DictConfig, run_dir: Path, state: dict | None):
     """The training loop of ``cfg.algo.name``, restored from ``state`` when resuming."""
-    if cfg.algo.name == "dps":
+    if cfg.algo.name in ("dps", "feedback"):
         from jugglerl.dps.training import DPSTraining
+        from jugglerl.feedback_training import FeedbackTraining
 
-        training = DPSTraining(cfg, run_dir)
+        search = DPSTraining if cfg.algo.name == "dps" else FeedbackTraining
+        training = search(cfg, run_dir)
         if state is not None:
             training.load_state_dict(state)
         return training

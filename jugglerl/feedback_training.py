@@ -1,0 +1,148 @@
+"""``algo=feedback``: eREPS (or any DPS rule) over the gains of the closed-loop ``FeedbackPolicy``.
+
+The loop is ``DPSTraining``'s, over a different search space: θ is ``FeedbackGains`` (bounded by
+``algo.bounds``), the command it locks to is fixed (``algo.command``), and every θ is rolled out
+closed loop in the Python env, once under each of ``algo.conditions`` (env overrides: nominal,
+kicks, start offsets), in ``algo.workers`` processes. A θ's return is its throws summed over the
+conditions, so the search prefers gains that juggle in all of them. The best θ is written as
+``best_policy.yaml`` (``scripts/evaluate.py policy=<run dir>/best_policy.yaml``).
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import torch
+from omegaconf import DictConfig, OmegaConf
+
+from jugglerl.commands import ViaPointCommand, command_from_dict, load_command
+from jugglerl.config import make_juggle_env
+from jugglerl.dps.rollouts import RolloutResults
+from jugglerl.dps.training import DPSTraining
+from jugglerl.evaluation import run_episode
+from jugglerl.feedback import (
+    PARAM_NAMES,
+    FeedbackGains,
+    FeedbackPolicy,
+    GainBounds,
+    save_feedback_policy,
+)
+
+BEST_POLICY = "best_policy.yaml"
+
+
+def _episode(task: tuple[dict, dict, tuple[float, ...], int]) -> tuple[int, float]:
+    """Worker: one closed-loop episode; (throws, time to drop or NaN)."""
+    env_kwargs, command, gains, seed = task
+    env = make_juggle_env(OmegaConf.create(env_kwargs))
+    policy = FeedbackPolicy(command_from_dict(command), FeedbackGains(*gains), env)
+    metrics = run_episode(env, policy, seed=seed)
+    env.close()
+    drop = math.nan if metrics.time_to_drop is None else metrics.time_to_drop
+    return metrics.throws, drop
+
+
+class FeedbackRollouts:
+    """Rolls ``FeedbackGains`` out with ``command`` under each of ``conditions``.
+
+    ``evaluate(gains, seeds)`` gives, per θ, the throws summed over the conditions and the
+    earliest drop (NaN when none dropped); episode ``k`` of θ ``i`` uses reset seed
+    ``seeds[i] + k``.
+    """
+
+    def __init__(
+        self, env_cfg: DictConfig, command: ViaPointCommand, conditions: list[dict], workers: int
+    ):
+        base = OmegaConf.to_container(env_cfg, resolve=True)
+        self.envs = [{**base, **condition} for condition in conditions]
+        for env_kwargs in self.envs:  # bad keys or values fail here, not in a worker
+            make_juggle_env(OmegaConf.create(env_kwargs)).close()
+        self.command = command.to_dict()
+        self._pool = ProcessPoolExecutor(workers)
+
+    def evaluate(self, candidates: list[FeedbackGains], seeds: list[int]) -> RolloutResults:
+        tasks = [
+            (env, self.command, tuple(vars(gains).values()), seed + k)
+            for gains, seed in zip(candidates, seeds, strict=True)
+            for k, env in enumerate(self.envs)
+        ]
+        results = np.array(list(self._pool.map(_episode, tasks)), dtype=np.float64)
+        results = results.reshape(len(candidates), len(self.envs), 2)
+        return RolloutResults(
+            throws=results[..., 0].sum(axis=1).astype(np.int64),
+            time_to_drop=np.fmin.reduce(results[..., 1], axis=1),
+        )
+
+    def close(self) -> None:
+        self._pool.shutdown()
+
+    def __enter__(self) -> FeedbackRollouts:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+
+class FeedbackTraining(DPSTraining):
+    """One ``algo=feedback`` run; see the module docstring."""
+
+    def _search_space(self):
+        algo = self.cfg.algo
+        self.pan = 0.0  # not searched; the command carries its own pan
+        self.command = load_command(algo.command)
+        bounds = GainBounds.from_config(dict(algo.bounds))
+        start = torch.tensor([algo.start[name] for name in PARAM_NAMES], dtype=torch.float64)
+        problems = bounds.violations(start)
+        if problems:
+            raise ValueError(f"algo.start: outside algo.bounds: {'; '.join(problems)}")
+        stds = torch.tensor([algo.std[name] for name in PARAM_NAMES], dtype=torch.float64)
+        rollouts = self._rollouts(list(algo.conditions))
+        return start, stds, bounds, rollouts, FeedbackGains.from_params
+
+    def _rollouts(self, conditions: list) -> FeedbackRollouts:
+        conditions = [dict(condition) for condition in conditions]
+        return FeedbackRollouts(self.cfg.env, self.command, conditions, self.cfg.algo.workers)
+
+    def _distribution_record(self, distribution) -> dict[str, float]:
+        means = zip(PARAM_NAMES, distribution.mean, strict=True)
+        return {f"mean_{name}": float(mean) for name, mean in means}
+
+    def best_gains(self) -> FeedbackGains:
+        return FeedbackGains.from_params(self.best.params)
+
+    def best_policy(self, env) -> FeedbackPolicy:
+        return FeedbackPolicy(self.command, self.best_gains(), env)
+
+    def save_best(self) -> None:
+        save_feedback_policy(
+            Path(self.run_dir) / BEST_POLICY, self.command, self.best_gains(), "feedback_best"
+        )
+
+    def _best_description(self) -> dict:
+        return {"best_gains": vars(self.best_gains()), "command": self.command.to_dict()}
+
+    def _headline(self, metrics: dict) -> str:
+        return (
+            f"feedback ({self.cfg.algo['update']}): best gains scored {metrics['best_throws']}"
+            f" throws over {len(self.cfg.algo.conditions)} conditions x"
+            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} samples"
+        )
+
+    def noise_check(self) -> dict:
+        """The best gains' throws from ``noise_check.seeds`` starts with ball offset noise."""
+        check = self.cfg.algo.noise_check
+        with self._rollouts([{"reset_noise": check.reset_noise}]) as rollouts:
+            seeds = list(range(check.seeds))
+            throws = rollouts.evaluate([self.best_gains()] * len(seeds), seeds).throws
+        nominal = self.best_policy(self.env)
+        nominal_throws = run_episode(self.env, nominal, seed=0).throws
+        return {
+            "reset_noise": check.reset_noise,
+            "seeds": seeds,
+            "throws": throws.tolist(),
+            "mean_throws": float(np.mean(throws)),
+            "fraction_of_best": float(np.mean(throws) / max(nominal_throws, 1)),
+        }

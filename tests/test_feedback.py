@@ -1,0 +1,189 @@
+"""The closed-loop FeedbackPolicy, its policy files, its roll-outs and algo=feedback training."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+import yaml
+from cli import run_script, run_train
+
+from jugglerl.commands import CommandError, load_command
+from jugglerl.config import make_juggle_env
+from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.feedback import (
+    LOCK_HEIGHT,
+    PARAM_NAMES,
+    FeedbackGains,
+    FeedbackPolicy,
+    GainBounds,
+    feedback_policy_path,
+    load_feedback_policy,
+    save_feedback_policy,
+    steer,
+)
+from jugglerl.feedback_training import FeedbackRollouts
+from jugglerl.policies import load_policy
+from jugglerl_envs import JuggleEnv
+
+OPEN_LOOP = FeedbackGains(0.5, 0.0, 0.0, 1.0, 0.0, 0.0)
+
+
+def falling_ball(height: float, x: float = 0.0, vz: float = -1.0) -> np.ndarray:
+    """An observation with the cup at rest at (0, 0, 0.8) and the ball ``height`` above it."""
+    obs = np.zeros(18)
+    obs[6:9] = (x, 0.0, 0.8 + height)
+    obs[9:12] = (0.0, 0.0, vz)
+    obs[12:15] = (0.0, 0.0, 0.8)
+    return obs
+
+
+def test_without_gains_it_plays_the_command_open_loop():
+    env = JuggleEnv(duration=6.0)
+    command = load_command("dps_best")
+    closed, plain = FeedbackPolicy(command, OPEN_LOOP, env), CommandPolicy(command, env)
+    obs, info = env.reset(seed=0)
+    closed.reset()
+    for _ in range(300):
+        action = closed.act(obs, info["time"])
+        np.testing.assert_allclose(action, plain.act(obs, info["time"]), atol=1e-9)
+        obs, _, terminated, _, info = env.step(action)
+        assert not terminated
+
+
+def test_the_falling_ball_locks_the_phase_at_the_interpolated_crossing():
+    env = JuggleEnv()
+    gains = FeedbackGains(0.6, 1.0, 0.0, 1.0, 0.0, 0.0)
+    policy = FeedbackPolicy(load_command("dps_best"), gains, env)
+    policy.reset()
+    policy.act(falling_ball(0.5), 1.0)  # above the lock height: the clock runs freely
+    assert policy.phase == 1.0
+    policy.act(falling_ball(LOCK_HEIGHT - 0.01), 1.02)  # crossed 0.01 s ago at 1 m/s
+    assert policy.phase == pytest.approx(0.6 + 0.01)
+    policy.act(falling_ball(LOCK_HEIGHT - 0.02), 1.04)  # locked once per fall
+    assert policy.phase == pytest.approx(0.6 + 0.01 + env.dt)
+    half = FeedbackPolicy(load_command("dps_best"), FeedbackGains(0.6, 0.5, 0, 1, 0, 0), env)
+    half.reset()
+    half.act(falling_ball(0.5), 1.0)
+    half.act(falling_ball(LOCK_HEIGHT), 1.02)  # error 0.6 - 1.02: half of it is removed
+    assert half.phase == pytest.approx(1.02 + 0.5 * (0.6 - 1.02))
+
+
+def test_tracking_moves_the_offset_toward_the_landing_point_and_decays_it_after():
+    env = JuggleEnv()
+    gains = FeedbackGains(0.6, 0.0, 0.25, 0.5, 0.01, 0.0)
+    policy = FeedbackPolicy(load_command("dps_best"), gains, env)
+    policy.reset()
+    policy.act(falling_ball(0.5, x=0.03, vz=0.0), 0.0)  # lands 3 cm along x; aim 1 cm
+    np.testing.assert_allclose(policy.offset, [0.25 * 0.02, 0.0])
+    policy.act(falling_ball(0.05), 0.02)  # in the cup: decays
+    np.testing.assert_allclose(policy.offset, [0.5 * 0.25 * 0.02, 0.0])
+
+
+def test_steer_moves_the_cup_along_the_offset():
+    env = JuggleEnv(duration=5.0)
+    home = env.unwrapped.home
+
+    def cup_after(setpoints):
+        obs, _ = env.reset(seed=0)
+        for _ in range(50):
+            obs, *_ = env.step(env.ctrl_to_action(setpoints))
+        return obs[12:14]
+
+    for offset in (np.array([0.02, -0.015]), np.array([-0.01, 0.03])):
+        moved = cup_after(home + steer(offset)) - cup_after(home)
+        cosine = moved @ offset / np.linalg.norm(moved) / np.linalg.norm(offset)
+        assert cosine > 0.95
+        # kinematic levers; through the servos the cup goes somewhat further (module docs)
+        assert 0.9 < np.linalg.norm(moved) / np.linalg.norm(offset) < 1.5
+
+
+def test_the_shipped_closed_loop_policy_loads_by_name_and_juggles():
+    env = JuggleEnv()
+    policy = load_policy("closed_loop", env)
+    assert isinstance(policy, FeedbackPolicy)
+    assert run_episode(env, policy, seed=0).throws >= 39  # the paper's best, open loop
+
+
+def test_closed_loop_keeps_juggling_under_kicks_that_break_the_open_loop_command():
+    env = JuggleEnv(kick_rate=0.5, kick_speed=0.01)
+    closed, open_loop = load_policy("closed_loop", env), load_policy("dps_best", env)
+    for seed in (0, 1):
+        assert run_episode(env, closed, seed).throws > 2 * run_episode(env, open_loop, seed).throws
+
+
+def test_policy_files_round_trip_and_bad_ones_are_named(tmp_path):
+    env = JuggleEnv()
+    gains = FeedbackGains(0.58, 0.9, 0.3, 0.98, -0.02, 0.01)
+    path = save_feedback_policy(tmp_path / "p.yaml", load_command("expert"), gains, "mine")
+    assert feedback_policy_path(str(path)) == path
+    assert load_feedback_policy(path, env).gains == gains
+    assert feedback_policy_path("expert") is None  # a command, not a closed-loop policy
+    data = yaml.safe_load(path.read_text())
+    del data["feedback"]["decay"]
+    data["feedback"]["gain"] = 1.0
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump({**data, "feedback": data["feedback"]}))
+    with pytest.raises(CommandError, match="bad.yaml: feedback needs exactly the keys"):
+        load_feedback_policy(tmp_path / "bad.yaml", env)
+
+
+def test_gain_bounds_clip_samples_and_name_what_is_missing():
+    bounds = GainBounds.from_config({name: [0.0, 1.0] for name in PARAM_NAMES})
+    params = torch.tensor([-1.0, 0.5, 2.0, 1.0, 0.0, 0.3], dtype=torch.float64)
+    expected = ["land_phase=-1 outside [0, 1]", "land_gain=2 outside [0, 1]"]
+    assert bounds.violations(params) == expected
+    assert bounds.violations(bounds.project(params)) == []
+    with pytest.raises(ValueError, match="missing \\['decay'\\]"):
+        GainBounds.from_config({name: [0, 1] for name in PARAM_NAMES if name != "decay"})
+
+
+def test_rollouts_sum_the_throws_over_the_conditions():
+    from omegaconf import OmegaConf
+
+    env_cfg = OmegaConf.create({"duration": 10.0})
+    conditions = [{}, {"reset_noise": 0.02}]
+    gains = FeedbackGains(0.58, 0.9, 0.3, 0.98, -0.02, 0.01)
+    command = load_command("dps_best")
+    with FeedbackRollouts(env_cfg, command, conditions, workers=1) as rollouts:
+        results = rollouts.evaluate([gains, OPEN_LOOP], [3, 7])
+    for i, (candidate, seed) in enumerate([(gains, 3), (OPEN_LOOP, 7)]):
+        expected = 0
+        for k, condition in enumerate(conditions):
+            env = make_juggle_env(env_cfg, **condition)
+            expected += run_episode(env, FeedbackPolicy(command, candidate, env), seed + k).throws
+        assert results.throws[i] == expected
+    assert results.throws[0] > 0
+
+
+def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
+    run_dir = tmp_path / "run"
+    short = [
+        "algo=feedback",
+        "env.duration=10",
+        "algo.episodes=2",
+        "algo.rollouts=2",
+        "algo.workers=1",
+        "algo.noise_check.seeds=1",
+        "progress=false",
+        "record_best=false",
+        f"hydra.run.dir={run_dir}",
+    ]
+    result = run_train(*short)
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    assert metrics["rollouts"] == 4 and set(metrics["best_gains"]) == set(PARAM_NAMES)
+    assert "feedback (ereps): best gains scored" in result.stdout
+    evaluated = run_script(
+        "evaluate.py",
+        f"policy={run_dir / 'best_policy.yaml'}",
+        "env.duration=10",
+        f"hydra.run.dir={tmp_path / 'eval'}",
+    )
+    assert evaluated.returncode == 0, evaluated.stderr
+    assert "throws in 10 s" in evaluated.stdout
+    resumed = run_train(
+        *short[:-1], f"resume={run_dir}", "algo.episodes=3", f"hydra.run.dir={tmp_path}/r"
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"resuming {run_dir} at episode 2" in resumed.stdout
+    assert json.loads((run_dir / "metrics.json").read_text())["rollouts"] == 6
