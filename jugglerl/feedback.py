@@ -15,10 +15,11 @@ centimetre off-centre hits the cone's wall. ``FeedbackPolicy`` closes both loops
   along x without tilting it. Between flights the offset decays by ``decay`` per step, back to
   the command.
 
-The five gains and the aim point ``(bias_x, bias_y)`` form the parameter vector ``θ`` that
-``algo=feedback`` (``jugglerl.feedback_training``) searches with eREPS. A policy file is YAML:
-``name``, ``command`` (a command mapping, as in ``configs/commands/``) and ``feedback`` (the
-gains by name); ``assets/policies/`` ships the trained one as ``policy=closed_loop``.
+The four gains and the aim point ``(bias_x, bias_y)`` form the parameter vector ``θ`` that
+``algo=feedback`` (``jugglerl.feedback_training``) searches with eREPS; this module needs no
+torch. A policy file is YAML: ``name``, ``command`` (a command mapping, as in
+``configs/commands/``) and ``feedback`` (the gains by name); ``assets/policies/`` ships the trained
+one as ``policy=closed_loop``.
 """
 
 from __future__ import annotations
@@ -30,7 +31,6 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-import torch
 import yaml
 
 from jugglerl.commands import CommandError, ViaPointCommand, command_from_dict
@@ -70,44 +70,8 @@ class FeedbackGains:
     bias_x: float  # m, landing point (relative to the cup) the tracking aims for
     bias_y: float
 
-    def to_params(self) -> torch.Tensor:
-        return torch.tensor([getattr(self, f.name) for f in fields(self)], dtype=torch.float64)
-
-    @classmethod
-    def from_params(cls, params: torch.Tensor) -> FeedbackGains:
-        return cls(*(float(value) for value in params))
-
 
 PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains))
-
-
-@dataclass(frozen=True)
-class GainBounds:
-    """Box constraints on ``θ`` (the DPS collector's ``constraints``): samples are clipped."""
-
-    low: torch.Tensor
-    high: torch.Tensor
-
-    @classmethod
-    def from_config(cls, bounds: dict) -> GainBounds:
-        missing = set(PARAM_NAMES) - set(bounds)
-        if missing:
-            raise ValueError(f"algo.bounds: missing {sorted(missing)}")
-        low, high = zip(*(bounds[name] for name in PARAM_NAMES), strict=True)
-        result = cls(*(torch.tensor(values, dtype=torch.float64) for values in (low, high)))
-        if torch.any(result.low > result.high):
-            raise ValueError("algo.bounds: every [low, high] needs low <= high")
-        return result
-
-    def project(self, params: torch.Tensor) -> torch.Tensor:
-        return torch.clamp(params, self.low, self.high)
-
-    def violations(self, params: torch.Tensor) -> list[str]:
-        return [
-            f"{name}={float(value):g} outside [{float(lo):g}, {float(hi):g}]"
-            for name, value, lo, hi in zip(PARAM_NAMES, params, self.low, self.high, strict=True)
-            if not lo <= value <= hi
-        ]
 
 
 class FeedbackPolicy:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -23,15 +24,43 @@ from jugglerl.config import make_juggle_env
 from jugglerl.dps.rollouts import RolloutResults
 from jugglerl.dps.training import DPSTraining
 from jugglerl.evaluation import run_episode
-from jugglerl.feedback import (
-    PARAM_NAMES,
-    FeedbackGains,
-    FeedbackPolicy,
-    GainBounds,
-    save_feedback_policy,
-)
+from jugglerl.feedback import PARAM_NAMES, FeedbackGains, FeedbackPolicy, save_feedback_policy
 
 BEST_POLICY = "best_policy.yaml"
+
+
+def gains_from_params(params: torch.Tensor) -> FeedbackGains:
+    """θ (``PARAM_NAMES`` order) as ``FeedbackGains``: the collector's ``decode``."""
+    return FeedbackGains(*(float(value) for value in params))
+
+
+@dataclass(frozen=True)
+class GainBounds:
+    """Box constraints on ``θ`` (the DPS collector's ``constraints``): samples are clipped."""
+
+    low: torch.Tensor
+    high: torch.Tensor
+
+    @classmethod
+    def from_config(cls, bounds: dict) -> GainBounds:
+        missing = set(PARAM_NAMES) - set(bounds)
+        if missing:
+            raise ValueError(f"algo.bounds: missing {sorted(missing)}")
+        low, high = zip(*(bounds[name] for name in PARAM_NAMES), strict=True)
+        result = cls(*(torch.tensor(values, dtype=torch.float64) for values in (low, high)))
+        if torch.any(result.low > result.high):
+            raise ValueError("algo.bounds: every [low, high] needs low <= high")
+        return result
+
+    def project(self, params: torch.Tensor) -> torch.Tensor:
+        return torch.clamp(params, self.low, self.high)
+
+    def violations(self, params: torch.Tensor) -> list[str]:
+        return [
+            f"{name}={float(value):g} outside [{float(lo):g}, {float(hi):g}]"
+            for name, value, lo, hi in zip(PARAM_NAMES, params, self.low, self.high, strict=True)
+            if not lo <= value <= hi
+        ]
 
 
 def _episode(task: tuple[dict, dict, tuple[float, ...], int]) -> tuple[int, float]:
@@ -100,7 +129,7 @@ class FeedbackTraining(DPSTraining):
             raise ValueError(f"algo.start: outside algo.bounds: {'; '.join(problems)}")
         stds = torch.tensor([algo.std[name] for name in PARAM_NAMES], dtype=torch.float64)
         rollouts = self._rollouts(list(algo.conditions))
-        return start, stds, bounds, rollouts, FeedbackGains.from_params
+        return start, stds, bounds, rollouts, gains_from_params
 
     def _rollouts(self, conditions: list) -> FeedbackRollouts:
         conditions = [dict(condition) for condition in conditions]
@@ -111,7 +140,7 @@ class FeedbackTraining(DPSTraining):
         return {f"mean_{name}": float(mean) for name, mean in means}
 
     def best_gains(self) -> FeedbackGains:
-        return FeedbackGains.from_params(self.best.params)
+        return gains_from_params(self.best.params)
 
     def best_policy(self, env) -> FeedbackPolicy:
         return FeedbackPolicy(self.command, self.best_gains(), env)

@@ -16,13 +16,12 @@ from jugglerl.feedback import (
     PARAM_NAMES,
     FeedbackGains,
     FeedbackPolicy,
-    GainBounds,
     feedback_policy_path,
     load_feedback_policy,
     save_feedback_policy,
     steer,
 )
-from jugglerl.feedback_training import FeedbackRollouts
+from jugglerl.feedback_training import FeedbackRollouts, GainBounds
 from jugglerl.policies import load_policy
 from jugglerl_envs import JuggleEnv
 

@@ -1,7 +1,8 @@
 """``DPSCollector``: Direct Policy Search as a TorchRL collector.
 
 Each iteration samples ``frames_per_batch`` parameter vectors θ from the current search
-distribution, rolls their commands out at raw physics speed (``CommandRollouts``) and yields a
+distribution, rolls them out (their commands at raw physics speed with ``CommandRollouts``, or
+closed-loop feedback gains with ``jugglerl.feedback_training.FeedbackRollouts``) and yields a
 ``[frames_per_batch]`` TensorDict:
 
 - ``params`` (float64, ``[1 + 3p]``): θ, laid out as in ``jugglerl.dps.params``;

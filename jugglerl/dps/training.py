@@ -128,7 +128,7 @@ class DPSTraining:
         bar = tqdm(
             total=self.cfg.algo.episodes,
             initial=self.collector.iteration,
-            desc="DPS",
+            desc=self.cfg.algo.name.upper(),
             unit="episode",
             disable=not progress,
         )
