@@ -91,6 +91,37 @@ def test_the_checkpoint_ships_the_target_actor_unless_told_otherwise(tmp_path):
             assert not torch.equal(targets[key], online[key])
 
 
+def test_keep_best_ships_the_actor_of_the_best_evaluation(tmp_path):
+    cfg = train_config(*TINY, "eval.keep_best=true", "eval.target_actor=false")
+    training = DDPGTraining(cfg, tmp_path)
+
+    def evaluated(catch_rate, time_up):
+        record = {"catch_rate": catch_rate, "mean_throws": 0.0, "mean_time_to_drop": time_up}
+        training._keep_if_best(record)
+        kept = {k: v.clone() for k, v in training.actor.state_dict().items()}
+        with torch.no_grad():  # the training moves on
+            for parameter in training.actor.parameters():
+                parameter.add_(0.1)
+        return kept
+
+    evaluated(0.0, 1.0)
+    best = evaluated(1.0, 2.0)
+    evaluated(0.0, 30.0)  # up longer but caught less: not kept
+    for key, value in training.deployed_actor().state_dict().items():
+        torch.testing.assert_close(value, best[key])
+    assert training.best["score"] == [1.0, 0.0, 2.0]
+    tie = evaluated(1.0, 2.0)  # a tie goes to the later actor
+    torch.testing.assert_close(training.deployed_actor().state_dict(), tie)
+    restored = DDPGTraining(cfg, tmp_path / "again", training.state_dict())
+    torch.testing.assert_close(restored.deployed_actor().state_dict(), tie)
+    training.close()
+    restored.close()
+    plain = DDPGTraining(train_config(*TINY), tmp_path / "plain")
+    plain._keep_if_best({"catch_rate": 1.0, "mean_throws": 0.0, "mean_time_to_drop": 2.0})
+    assert plain.best is None  # off by default: the last actor ships
+    plain.close()
+
+
 def test_train_script_trains_resumes_and_evaluate_replays_the_checkpoint(tmp_path):
     first = run_train(*TINY, "actor=lstm", f"hydra.run.dir={tmp_path}")
     assert first.returncode == 0, first.stderr

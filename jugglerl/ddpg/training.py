@@ -18,6 +18,7 @@ each evaluation is recorded under ``eval/<frames>``.
 
 from __future__ import annotations
 
+import copy
 import json
 import time
 from pathlib import Path
@@ -74,6 +75,8 @@ class DDPGTraining:
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
         self.history: list[dict] = []  # one record per collected batch
         self.evaluations: list[dict] = []
+        #: with ``eval.keep_best``: frames, score and weights of the best periodic evaluation
+        self.best: dict | None = None
         self.recording_id: str | None = None
         if state is not None:
             self.load_state_dict(state)
@@ -103,7 +106,9 @@ class DDPGTraining:
             self.save()
             raise
         self.wall_seconds += time.monotonic() - started
-        final = self.evaluate(logger, self.cfg.env.duration)
+        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor())
+        if self.best is not None:
+            final["policy_frames"] = self.best["frames"]
         self.save()
         metrics = {
             "actor": self.cfg.actor.name,
@@ -146,7 +151,7 @@ class DDPGTraining:
                 )
                 bar.update(batch.numel())
                 if _crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
-                    self.evaluate(logger, self.cfg.eval.duration)
+                    self._keep_if_best(self.evaluate(logger, self.cfg.eval.duration))
                 if _crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
                     self.save()
         finally:
@@ -194,25 +199,46 @@ class DDPGTraining:
         )
 
     # --- evaluation -----------------------------------------------------------------------
-    def deployed_actor(self):
-        """The actor evaluation and ``evaluate.py`` run: the target (Polyak-averaged) actor with
+    def current_actor(self):
+        """The actor as trained so far: the target (Polyak-averaged) actor with
         ``eval.target_actor``, else the online one. The online actor can swing between
         updates; its average moves by ``algo.tau`` per update and holds on to what worked."""
         return self.update.target_actor() if self.cfg.eval.target_actor else self.actor
 
-    def actor_policy(self) -> ActorPolicy:
-        """The deployed actor as a deterministic ``Policy`` on plain Gymnasium envs."""
+    def deployed_actor(self):
+        """The actor the final evaluation, the checkpoint's ``policy`` and ``evaluate.py`` run:
+        with ``eval.keep_best``, the one of the best periodic evaluation; else the current one."""
+        actor = self.current_actor()
+        if self.best is None:
+            return actor
+        best = copy.deepcopy(actor)
+        best.load_state_dict(self.best["policy"])
+        return best
+
+    def _keep_if_best(self, record: dict) -> None:
+        """With ``eval.keep_best``, keep the current actor if this evaluation is the best so far
+        (catch rate, then throws, then time up; a tie goes to the later one)."""
+        if not self.cfg.eval.keep_best:
+            return
+        score = [record["catch_rate"], record["mean_throws"], record["mean_time_to_drop"]]
+        if self.best is None or score >= self.best["score"]:
+            weights = copy.deepcopy(self.current_actor().state_dict())
+            self.best = {"frames": self.frames, "score": score, "policy": weights}
+
+    def actor_policy(self, actor) -> ActorPolicy:
+        """``actor`` as a deterministic ``Policy`` on plain Gymnasium envs."""
         norm = normalisation(self.env)
         transforms = observation_transforms(
             self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
         )
-        return ActorPolicy(self.deployed_actor(), transforms)
+        return ActorPolicy(actor, transforms)
 
-    def evaluate(self, logger: RerunLogger, duration: float) -> dict:
-        """Deterministic episodes of ``duration`` s from env seeds ``0..eval.seeds-1``; with
-        ``eval.record`` the first is recorded under ``eval/<frames>``."""
+    def evaluate(self, logger: RerunLogger, duration: float, actor=None) -> dict:
+        """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s from
+        env seeds ``0..eval.seeds-1``; with ``eval.record`` the first is recorded under
+        ``eval/<frames>``."""
         check = self.cfg.eval
-        policy = self.actor_policy()
+        policy = self.actor_policy(actor if actor is not None else self.current_actor())
         seeds = list(range(check.seeds))
         envs = [make_juggle_env(self.cfg.env, duration=duration)] * len(seeds)
         root = join(EVAL, f"{self.frames:08d}")
@@ -254,6 +280,7 @@ class DDPGTraining:
             },
             "history": self.history,
             "evaluations": self.evaluations,
+            "best": self.best,
             "recording_id": self.recording_id,
         }
 
@@ -268,6 +295,7 @@ class DDPGTraining:
         self.wall_seconds = state["counters"]["wall_seconds"]
         self.history = list(state["history"])
         self.evaluations = list(state["evaluations"])
+        self.best = state.get("best")  # absent in checkpoints written before eval.keep_best
         self.recording_id = state["recording_id"]
 
     def save(self) -> None:
