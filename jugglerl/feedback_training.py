@@ -19,7 +19,7 @@ import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from jugglerl.commands import ViaPointCommand, command_from_dict, load_command
+from jugglerl.commands import ViaPointCommand, load_command
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.rollouts import RolloutResults
 from jugglerl.dps.training import DPSTraining
@@ -63,11 +63,11 @@ class GainBounds:
         ]
 
 
-def _episode(task: tuple[dict, dict, tuple[float, ...], int]) -> tuple[int, float]:
+def _episode(task: tuple[dict, ViaPointCommand, FeedbackGains, int]) -> tuple[int, float]:
     """Worker: one closed-loop episode; (throws, time to drop or NaN)."""
     env_kwargs, command, gains, seed = task
     env = make_juggle_env(OmegaConf.create(env_kwargs))
-    policy = FeedbackPolicy(command_from_dict(command), FeedbackGains(*gains), env)
+    policy = FeedbackPolicy(command, gains, env)
     metrics = run_episode(env, policy, seed=seed)
     env.close()
     drop = math.nan if metrics.time_to_drop is None else metrics.time_to_drop
@@ -89,12 +89,12 @@ class FeedbackRollouts:
         self.envs = [{**base, **condition} for condition in conditions]
         for env_kwargs in self.envs:  # bad keys or values fail here, not in a worker
             make_juggle_env(OmegaConf.create(env_kwargs)).close()
-        self.command = command.to_dict()
+        self.command = command
         self._pool = ProcessPoolExecutor(workers)
 
     def evaluate(self, candidates: list[FeedbackGains], seeds: list[int]) -> RolloutResults:
         tasks = [
-            (env, self.command, tuple(vars(gains).values()), seed + k)
+            (env, self.command, gains, seed + k)
             for gains, seed in zip(candidates, seeds, strict=True)
             for k, env in enumerate(self.envs)
         ]
@@ -160,18 +160,9 @@ class FeedbackTraining(DPSTraining):
             f" {self.cfg.env.duration:g} s after {metrics['rollouts']} samples"
         )
 
-    def noise_check(self) -> dict:
-        """The best gains' throws from ``noise_check.seeds`` starts with ball offset noise."""
-        check = self.cfg.algo.noise_check
-        with self._rollouts([{"reset_noise": check.reset_noise}]) as rollouts:
-            seeds = list(range(check.seeds))
-            throws = rollouts.evaluate([self.best_gains()] * len(seeds), seeds).throws
-        nominal = self.best_policy(self.env)
-        nominal_throws = run_episode(self.env, nominal, seed=0).throws
-        return {
-            "reset_noise": check.reset_noise,
-            "seeds": seeds,
-            "throws": throws.tolist(),
-            "mean_throws": float(np.mean(throws)),
-            "fraction_of_best": float(np.mean(throws) / max(nominal_throws, 1)),
-        }
+    def _rollouts_with_reset_noise(self, reset_noise: float) -> FeedbackRollouts:
+        return self._rollouts([{"reset_noise": reset_noise}])
+
+    def _nominal_throws(self) -> int:
+        """The score sums the conditions, so the standard start is replayed."""
+        return run_episode(self.env, self.best_policy(self.env), seed=0).throws

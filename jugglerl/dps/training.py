@@ -262,19 +262,28 @@ class DPSTraining:
         return {"best_command": self.best_command().to_dict()}
 
     def noise_check(self) -> dict:
-        """The best command's throws from ``noise_check.seeds`` starts with ball offset noise."""
+        """The best θ's throws from ``noise_check.seeds`` starts with ball offset noise, and
+        their fraction of its throws from the standard start."""
         check = self.cfg.algo.noise_check
-        env = make_juggle_env(self.cfg.env, reset_noise=check.reset_noise)
-        with CommandRollouts(env, nthread=self.cfg.algo.threads) as rollouts:
+        best = self.collector.decode(self.best.params)
+        with self._rollouts_with_reset_noise(check.reset_noise) as rollouts:
             seeds = list(range(check.seeds))
-            throws = rollouts.evaluate([self.best_command()] * len(seeds), seeds).throws
+            throws = rollouts.evaluate([best] * len(seeds), seeds).throws
         return {
             "reset_noise": check.reset_noise,
             "seeds": seeds,
             "throws": throws.tolist(),
             "mean_throws": float(np.mean(throws)),
-            "fraction_of_best": float(np.mean(throws) / max(self.best.throws, 1)),
+            "fraction_of_best": float(np.mean(throws) / max(self._nominal_throws(), 1)),
         }
+
+    def _rollouts_with_reset_noise(self, reset_noise: float) -> CommandRollouts:
+        env = make_juggle_env(self.cfg.env, reset_noise=reset_noise)
+        return CommandRollouts(env, nthread=self.cfg.algo.threads)
+
+    def _nominal_throws(self) -> int:
+        """The best θ's throws from the standard start: its score, here."""
+        return self.best.throws
 
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:
