@@ -82,6 +82,28 @@ class ViaPointCommand:
     def _angles(self) -> np.ndarray:
         return np.array([(lift, elbow) for _, lift, elbow in self.via_points])
 
+    def shorten_hold(self, index: int, cut: float) -> ViaPointCommand:
+        """This command with via-point ``index`` held ``cut`` seconds less: every later via-point
+        and the cycle's end move ``cut`` earlier, so the rest of the motion keeps its shape and
+        timing (a negative ``cut`` holds longer). Used to measure how short a wait, e.g. the
+        ball's settling in the cup between catch and throw, a command tolerates."""
+        if not 0 <= index < len(self.via_points):
+            raise CommandError(
+                f"via-point {index} does not exist: the command has {len(self.via_points)}"
+            )
+        times = self._times
+        hold_end = times[index + 1] if index + 1 < len(times) else self.cycle + times[0]
+        if cut >= hold_end - times[index]:
+            raise CommandError(
+                f"cannot cut {cut} s from via-point {index}'s hold of"
+                f" {hold_end - times[index]:.3f} s"
+            )
+        points = tuple(
+            (t - cut if i > index else t, lift, elbow)
+            for i, (t, lift, elbow) in enumerate(self.via_points)
+        )
+        return ViaPointCommand(self.cycle - cut, points, self.pan, name=self.name)
+
     def to_dict(self) -> dict:
         return {
             "name": self.name,

@@ -56,6 +56,31 @@ def test_missing_command_names_the_path(tmp_path):
         load_command(tmp_path / "c.json")
 
 
+def test_shorten_hold_moves_the_rest_of_the_command_earlier():
+    command = ViaPointCommand(3.0, ((0.2, -1.5, 2.1), (1.5, -1.5, 1.4), (2.0, -1.6, 2.0)))
+    cut = command.shorten_hold(0, 0.25)
+    assert cut.cycle == pytest.approx(2.75)
+    np.testing.assert_allclose([t for t, _, _ in cut.via_points], [0.2, 1.25, 1.75])
+    held = np.linspace(0.0, 1.24, 50)  # before and during via-point 0's hold: unchanged
+    np.testing.assert_allclose(cut.setpoints(held), command.setpoints(held))
+    later = np.linspace(1.25, 2.74, 50)  # after it: the original, 0.25 s later
+    np.testing.assert_allclose(cut.setpoints(later), command.setpoints(later + 0.25))
+    # the last via-point's hold runs to the cycle's end; a negative cut holds longer
+    assert command.shorten_hold(2, 0.5).via_points == command.via_points
+    assert command.shorten_hold(2, 0.5).cycle == pytest.approx(2.5)
+    assert command.shorten_hold(1, -0.5).cycle == pytest.approx(3.5)
+
+
+@pytest.mark.parametrize(
+    ("index", "cut", "message"),
+    [(3, 0.1, "via-point 3 does not exist"), (1, 0.5, "cannot cut 0.5 s from via-point 1")],
+)
+def test_shorten_hold_refuses_what_cannot_be_cut(index, cut, message):
+    command = ViaPointCommand(3.0, ((0.2, -1.5, 2.1), (1.5, -1.5, 1.4), (2.0, -1.6, 2.0)))
+    with pytest.raises(CommandError, match=message):
+        command.shorten_hold(index, cut)
+
+
 def test_expert_juggles_at_least_seven_throws_in_the_paper_preset():
     env = JuggleEnv()
     metrics = run_episode(env, CommandPolicy(load_command("expert"), env), seed=0)

@@ -73,3 +73,20 @@ def test_bench_dps_prints_the_ratio_last():
     assert result.returncode == 0, result.stderr
     last = result.stdout.strip().splitlines()[-1]
     assert last.startswith("ratio ours / bare") and float(last.split()[-1]) > 0
+
+
+def test_hold_sweep_prints_a_row_per_cut():
+    script = Path(__file__).resolve().parents[1] / "scripts" / "hold_sweep.py"
+    arguments = ["--duration", "6", "--seeds", "2", "--cuts", "0,0.3"]
+    result = subprocess.run(
+        [sys.executable, str(script), *arguments], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    rows = [line.split() for line in result.stdout.strip().splitlines()[2:]]
+    assert [row[:2] for row in rows] == [["0.000", "2.177"], ["0.300", "1.877"]]
+    assert int(rows[0][2]) >= 2  # dps_best throws from the standard start within 6 s
+    refused = subprocess.run(
+        [sys.executable, str(script), "--cuts", "2"], capture_output=True, text=True, timeout=120
+    )
+    assert refused.returncode == 1
+    assert "cannot cut 2.0 s from via-point 0" in refused.stderr
