@@ -8,11 +8,17 @@ stay there until the next via-point; MuJoCo's position servos make the motion. B
 via-point of a cycle the last one's setpoints hold (the cycle wraps). ``shoulder_pan_joint`` stays
 at ``pan`` (radians).
 
+``lead_in`` (seconds, default 0) holds the pose the cycle starts in for that long before the first
+cycle. The ball is dropped into the cup at the start; without a lead-in the first throw comes as
+soon as the cycle says, before the dropped ball has settled, and an off-centre drop then often
+loses it in the first throws even where the cycle itself is stable.
+
 File format (YAML or JSON, same keys)::
 
     name: expert
     cycle: 3.0            # d, seconds
     pan: 0.0              # optional, radians
+    lead_in: 0.0          # optional, seconds
     via_points:           # [t (s), a2 (rad), a3 (rad)], t strictly increasing in [0, cycle)
       - [0.0, -1.5708, 2.2]
       - [1.5, -1.5708, 1.5]
@@ -21,7 +27,7 @@ File format (YAML or JSON, same keys)::
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -44,11 +50,14 @@ class ViaPointCommand:
     cycle: float
     via_points: tuple[tuple[float, float, float], ...]
     pan: float = 0.0
+    lead_in: float = 0.0
     name: str = field(default="command", compare=False)
 
     def __post_init__(self):
         if not np.isfinite(self.cycle) or self.cycle <= 0:
             raise CommandError(f"cycle={self.cycle!r} must be a positive number of seconds")
+        if not np.isfinite(self.lead_in) or self.lead_in < 0:
+            raise CommandError(f"lead_in={self.lead_in!r} must be a number of seconds >= 0")
         if not self.via_points:
             raise CommandError("via_points is empty: a command needs at least one via-point")
         if any(len(point) != 3 for point in self.via_points):
@@ -64,11 +73,17 @@ class ViaPointCommand:
             )
 
     def setpoints(self, time: float | np.ndarray) -> np.ndarray:
-        """Setpoints (pan, lift, elbow) in radians at ``time`` seconds after the command starts.
+        """Setpoints (pan, lift, elbow) in radians at ``time`` seconds after the command starts
+        (its lead-in included).
 
         ``time`` may be an array of times: the result then has one row of 3 per time.
         """
-        phase = np.mod(time, self.cycle)
+        return self.cycle_setpoints(np.subtract(time, self.lead_in))
+
+    def cycle_setpoints(self, cycle_time: float | np.ndarray) -> np.ndarray:
+        """Setpoints at ``cycle_time`` seconds after the first cycle starts; before it (negative
+        times: the lead-in) the pose the cycle starts in."""
+        phase = np.mod(np.maximum(cycle_time, 0.0), self.cycle)
         index = np.searchsorted(self._times, phase, side="right") - 1  # -1 wraps to the last
         lift_elbow = self._angles[index]
         pan = np.full(np.shape(phase) + (1,), self.pan)
@@ -102,13 +117,14 @@ class ViaPointCommand:
             (t - cut if i > index else t, lift, elbow)
             for i, (t, lift, elbow) in enumerate(self.via_points)
         )
-        return ViaPointCommand(self.cycle - cut, points, self.pan, name=self.name)
+        return replace(self, cycle=self.cycle - cut, via_points=points)
 
     def to_dict(self) -> dict:
         return {
             "name": self.name,
             "cycle": self.cycle,
             "pan": self.pan,
+            "lead_in": self.lead_in,
             "via_points": [list(p) for p in self.via_points],
         }
 
@@ -116,11 +132,14 @@ class ViaPointCommand:
 def command_from_dict(data: dict, source: str = "command") -> ViaPointCommand:
     """Build a command from the file format's mapping; errors name ``source`` and the key."""
     if not isinstance(data, dict):
-        raise CommandError(f"{source}: expected a mapping with keys cycle, via_points (and pan)")
-    unknown = set(data) - {"name", "cycle", "pan", "via_points"}
+        raise CommandError(
+            f"{source}: expected a mapping with keys cycle, via_points (and pan, lead_in)"
+        )
+    unknown = set(data) - {"name", "cycle", "pan", "lead_in", "via_points"}
     if unknown:
         raise CommandError(
-            f"{source}: unknown keys {sorted(unknown)}; valid: name, cycle, pan, via_points"
+            f"{source}: unknown keys {sorted(unknown)};"
+            " valid: name, cycle, pan, lead_in, via_points"
         )
     for key in ("cycle", "via_points"):
         if key not in data:
@@ -129,12 +148,14 @@ def command_from_dict(data: dict, source: str = "command") -> ViaPointCommand:
         points = tuple(tuple(float(v) for v in point) for point in data["via_points"])
         cycle = float(data["cycle"])
         pan = float(data.get("pan", 0.0))
+        lead_in = float(data.get("lead_in", 0.0))
     except (TypeError, ValueError) as error:
         raise CommandError(
-            f"{source}: cycle, pan and via_points must be numbers ({error})"
+            f"{source}: cycle, pan, lead_in and via_points must be numbers ({error})"
         ) from None
+    name = str(data.get("name", Path(source).stem))
     try:
-        return ViaPointCommand(cycle, points, pan, name=str(data.get("name", Path(source).stem)))
+        return ViaPointCommand(cycle, points, pan, lead_in, name=name)
     except CommandError as error:
         raise CommandError(f"{source}: {error}") from None
 

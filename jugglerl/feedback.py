@@ -93,7 +93,10 @@ class FeedbackPolicy:
 
     def act(self, observation: np.ndarray, time: float) -> np.ndarray:
         g = self.gains
-        self.phase = time if self.phase is None else self.phase + self._dt
+        if self.phase is None:  # the phase clock starts at the command's start, lead-in included
+            self.phase = time - self.command.lead_in
+        else:
+            self.phase += self._dt
         ball, ball_velocity = observation[6:9], observation[9:12]
         cup, cup_velocity = observation[12:15], observation[15:18]
         height = ball[2] - cup[2]
@@ -114,7 +117,7 @@ class FeedbackPolicy:
             self.offset = np.clip(self.offset + g.land_gain * error, -MAX_OFFSET, MAX_OFFSET)
         else:
             self.offset *= g.decay
-        return self._to_action(self.command.setpoints(self.phase) + steer(self.offset))
+        return self._to_action(self.command.cycle_setpoints(self.phase) + steer(self.offset))
 
 
 def steer(offset: np.ndarray) -> np.ndarray:

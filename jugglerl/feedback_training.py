@@ -120,7 +120,6 @@ class FeedbackTraining(DPSTraining):
 
     def _search_space(self):
         algo = self.cfg.algo
-        self.pan = 0.0  # not searched; the command carries its own pan
         self.command = load_command(algo.command)
         bounds = GainBounds.from_config(dict(algo.bounds))
         start = torch.tensor([algo.start[name] for name in PARAM_NAMES], dtype=torch.float64)

@@ -17,8 +17,19 @@ def test_setpoints_follow_via_points_and_wrap_around_the_cycle():
     np.testing.assert_allclose(command.setpoints(2.7), [0.1, -1.0, 1.0])  # next cycle
 
 
+def test_lead_in_holds_the_cycles_start_pose_then_plays_the_cycle_later():
+    cyclic = ViaPointCommand(2.0, ((0.5, -1.0, 1.0), (1.5, -1.2, 2.0)), pan=0.1)
+    led = ViaPointCommand(2.0, cyclic.via_points, pan=0.1, lead_in=0.7)
+    np.testing.assert_allclose(led.setpoints([0.0, 0.69]), cyclic.setpoints([0.0, 0.0]))
+    times = np.linspace(0.7, 6.0, 200)
+    np.testing.assert_allclose(led.setpoints(times), cyclic.setpoints(times - 0.7))
+    np.testing.assert_allclose(led.cycle_setpoints(times), cyclic.setpoints(times))
+    with pytest.raises(CommandError, match="lead_in=-0.1 must be a number of seconds >= 0"):
+        ViaPointCommand(2.0, cyclic.via_points, lead_in=-0.1)
+
+
 def test_save_and_load_round_trip(tmp_path):
-    command = ViaPointCommand(2.5, ((0.0, -1.5, 2.1), (1.2, -1.5, 1.4)), name="mine")
+    command = ViaPointCommand(2.5, ((0.0, -1.5, 2.1), (1.2, -1.5, 1.4)), lead_in=0.5, name="mine")
     for suffix in (".yaml", ".json"):
         assert load_command(save_command(command, tmp_path / f"c{suffix}")) == command
 
@@ -35,6 +46,7 @@ def test_save_and_load_round_trip(tmp_path):
         ("cycle: -1\nvia_points: [[0.0, -1.5, 2.0]]\n", "cycle=-1.0 must be a positive"),
         ("cycle: 3.0\nvia_points: [[0.0, -1.5]]\n", "via_points must be a list of [t, a2, a3]"),
         ("cycle: 3.0\nvia_points: [[0.0, x, 2.0]]\n", "must be numbers"),
+        ("cycle: 3.0\nlead_in: -1\nvia_points: [[0.0, -1.5, 2.0]]\n", "lead_in=-1.0 must be"),
         ("cycle: 3.0\nspeed: 2\nvia_points: [[0.0, -1.5, 2.0]]\n", "unknown keys ['speed']"),
         ("cycle: [3.0\n", "not valid YAML"),
         ("- 1\n- 2\n", "expected a mapping"),

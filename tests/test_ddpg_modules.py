@@ -1,6 +1,7 @@
 """The DDPG stack's modules: timestamp transform, env stack, exploration, actors, update, buffer."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -228,8 +229,9 @@ def test_unknown_actor_is_named():
 
 
 # --- residual actor -----------------------------------------------------------------------------
-def test_command_reference_is_the_commands_action_at_each_time():
-    env, command = JuggleEnv(), load_command("dps_best")
+@pytest.mark.parametrize("lead_in", [0.0, 0.5])
+def test_command_reference_is_the_commands_action_at_each_time(lead_in):
+    env, command = JuggleEnv(), replace(load_command("dps_best"), lead_in=lead_in)
     reference = CommandReference(command, env.ctrl_to_action)
     times = torch.linspace(0.0, 3 * command.cycle, 1001, dtype=torch.float64)
     expected = env.ctrl_to_action(command.setpoints(times.numpy()))

@@ -134,7 +134,7 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     assert metrics["best_throws"] == max(r["max_throws"] for r in history)
     assert [r["best_throws"] for r in history] == sorted(r["best_throws"] for r in history)
     best = load_command(tmp_path / "best_command.yaml")
-    assert best == training.best_command()
+    assert best == training.best_command() and best.lead_in == 0.5  # algo.lead_in's default
     # the best command replays to its score in the env, from its roll-out's start
     env = JuggleEnv(duration=8.0)
     replay = run_episode(env, CommandPolicy(best, env), seed=training.best.seed)
@@ -180,6 +180,7 @@ def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
         ("algo.update=adam", "error: algo.update='adam' is not one of greedy, weighted, elite"),
         ("algo.update=elite algo.elite=50", "error: algo.elite=50 must be in [2, algo.rollouts=4]"),
         ("algo.start=missing.yaml", "error: no command file at missing.yaml"),
+        ("algo.lead_in=-1", "error: algo.lead_in=-1 must be a number of seconds >= 0"),
         ("resume=nowhere", "error: resume: no checkpoint at nowhere"),
     ],
 )

@@ -1,6 +1,7 @@
 """The closed-loop FeedbackPolicy, its policy files, its roll-outs and algo=feedback training."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -37,9 +38,10 @@ def falling_ball(height: float, x: float = 0.0, vz: float = -1.0) -> np.ndarray:
     return obs
 
 
-def test_without_gains_it_plays_the_command_open_loop():
+@pytest.mark.parametrize("lead_in", [0.0, 0.5])
+def test_without_gains_it_plays_the_command_open_loop(lead_in):
     env = JuggleEnv(duration=6.0)
-    command = load_command("dps_best")
+    command = replace(load_command("dps_best"), lead_in=lead_in)
     closed, plain = FeedbackPolicy(command, OPEN_LOOP, env), CommandPolicy(command, env)
     obs, info = env.reset(seed=0)
     closed.reset()

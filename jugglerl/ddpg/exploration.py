@@ -49,7 +49,7 @@ class ExpertCentre:
         self.mode = mode
         self.reference = CommandReference(command, to_action)
         times = np.linspace(0.0, command.cycle, AVERAGE_SAMPLES, endpoint=False)
-        self.average = torch.as_tensor(to_action(command.setpoints(times)).mean(axis=0))
+        self.average = torch.as_tensor(to_action(command.cycle_setpoints(times)).mean(axis=0))
 
     def __call__(self, time: torch.Tensor) -> torch.Tensor:
         """Actions of shape ``time.shape + (3,)`` for episode times in seconds."""

@@ -28,11 +28,13 @@ class CommandReference(nn.Module):
         super().__init__()
         times = np.array([point[0] for point in command.via_points])
         self.register_buffer("times", torch.as_tensor(times, dtype=torch.float32))
-        actions = to_action(command.setpoints(times))  # the setpoint each via-point holds
+        actions = to_action(command.cycle_setpoints(times))  # the setpoint each via-point holds
         self.register_buffer("actions", torch.as_tensor(actions, dtype=torch.float32))
         self.cycle = float(command.cycle)
+        self.lead_in = float(command.lead_in)
 
     def forward(self, time: torch.Tensor) -> torch.Tensor:
-        phase = torch.remainder(time.to(self.times.dtype), self.cycle)
+        cycle_time = (time.to(self.times.dtype) - self.lead_in).clamp(min=0.0)
+        phase = torch.remainder(cycle_time, self.cycle)
         index = torch.searchsorted(self.times, phase.contiguous(), right=True) - 1  # -1: the last
         return self.actions[index]

@@ -46,10 +46,10 @@ class DPSCollector(BaseCollector):
         constraints: projection of samples onto valid parameters (``project``).
         frames_per_batch: roll-outs per iteration (the paper's N).
         total_frames: roll-out budget; ``-1`` runs until stopped.
-        pan: pan angle of every command (not searched), rad.
         seed: seeds the sampling RNG.
-        decode: turns one θ into what ``rollouts`` evaluates; default: the via-point command
-            (``params_to_command`` with ``pan``). ``algo=feedback`` decodes feedback gains.
+        decode: turns one θ into what ``rollouts`` evaluates; default: ``params_to_command``.
+            DPS training decodes with the start command's pan and the lead-in; ``algo=feedback``
+            decodes feedback gains.
     """
 
     def __init__(
@@ -60,7 +60,6 @@ class DPSCollector(BaseCollector):
         *,
         frames_per_batch: int,
         total_frames: int = -1,
-        pan: float = 0.0,
         seed: int = 0,
         decode: Callable[[torch.Tensor], Any] | None = None,
     ):
@@ -72,8 +71,7 @@ class DPSCollector(BaseCollector):
         self.constraints = constraints
         self.frames_per_batch = self.requested_frames_per_batch = frames_per_batch
         self.total_frames = total_frames
-        self.pan = pan
-        self.decode = decode or (lambda theta: params_to_command(theta, self.pan))
+        self.decode = decode or params_to_command
         self.generator = torch.Generator()
         self.set_seed(seed)
         self.iteration = 0

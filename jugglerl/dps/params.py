@@ -7,8 +7,8 @@ Layout of θ for a command with ``p`` via-points (length ``1 + 3 p``)::
             cycle s  time  lift   elbow  ...
 
 Times in seconds from the start of the cycle, angles in radians (servo setpoints of
-``shoulder_lift_joint`` and ``elbow_joint``). The pan angle is not searched: it stays at the start
-command's value.
+``shoulder_lift_joint`` and ``elbow_joint``). Not searched: the pan angle (the start command's) and
+the lead-in before the first cycle (``algo.lead_in``).
 
 A Gaussian sample is any real vector; ``ViaPointConstraints.project`` maps it onto a valid command:
 cycle in ``[min_cycle, max_cycle]``, via-points sorted by time (each moves with its angles), times
@@ -45,11 +45,14 @@ def command_to_params(command: ViaPointCommand) -> torch.Tensor:
     return torch.tensor([command.cycle, *np.ravel(command.via_points)], dtype=torch.float64)
 
 
-def params_to_command(params: torch.Tensor, pan: float = 0.0, name: str = "dps") -> ViaPointCommand:
-    """The command of a valid θ (see ``ViaPointConstraints.project``)."""
+def params_to_command(
+    params: torch.Tensor, pan: float = 0.0, name: str = "dps", lead_in: float = 0.0
+) -> ViaPointCommand:
+    """The command of a valid θ (see ``ViaPointConstraints.project``); ``pan`` and ``lead_in``
+    are not part of θ."""
     values = params.detach().cpu().double().tolist()
     points = tuple(tuple(values[1 + 3 * i : 4 + 3 * i]) for i in range(n_via_points(params)))
-    return ViaPointCommand(values[0], points, pan, name=name)
+    return ViaPointCommand(values[0], points, pan, lead_in, name=name)
 
 
 def component_stds(n_points: int, stds: dict[str, float]) -> torch.Tensor:

@@ -92,7 +92,6 @@ class DPSTraining:
             self.constraints,
             frames_per_batch=algo.rollouts,
             total_frames=algo.episodes * algo.rollouts,
-            pan=self.pan,
             seed=cfg.seed,
             decode=decode,
         )
@@ -102,11 +101,13 @@ class DPSTraining:
 
     def _search_space(self):
         """What is searched: the start θ, its stds, the constraints, the roll-outs and how a θ
-        becomes what they evaluate (None: the collector's via-point command). Here: via-point
-        commands from ``algo.start``, rolled out open loop in C."""
+        becomes what they evaluate (None: ``params_to_command``). Here: via-point commands from
+        ``algo.start``, with its pan and the lead-in ``algo.lead_in``, rolled out open loop in C."""
         algo = self.cfg.algo
         start = load_command(algo.start)
-        self.pan = start.pan
+        if not algo.lead_in >= 0:
+            raise ValueError(f"algo.lead_in={algo.lead_in} must be a number of seconds >= 0")
+        self.pan, self.lead_in = start.pan, float(algo.lead_in)
         constraints = ViaPointConstraints.from_model(
             self.env.unwrapped.model, algo.min_cycle, algo.max_cycle, algo.min_gap
         )
@@ -118,7 +119,8 @@ class DPSTraining:
                 f"algo.start={algo.start}: outside the constraints: {'; '.join(problems)}"
             )
         stds = component_stds(len(start.via_points), dict(algo.std))
-        return start_params, stds, constraints, CommandRollouts(self.env, algo.threads), None
+        rollouts = CommandRollouts(self.env, algo.threads)
+        return start_params, stds, constraints, rollouts, self.command_of
 
     # --- the loop -------------------------------------------------------------------------
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:
@@ -226,8 +228,12 @@ class DPSTraining:
         """What the history keeps of the search distribution: its cycle's mean and std."""
         return {"mean_cycle": float(distribution.mean[0]), "std_cycle": float(distribution.stds[0])}
 
+    def command_of(self, params: torch.Tensor, name: str = "dps") -> ViaPointCommand:
+        """The via-point command of θ, with the parts that are not searched."""
+        return params_to_command(params, self.pan, name, self.lead_in)
+
     def best_command(self) -> ViaPointCommand:
-        return params_to_command(self.best.params, self.pan, name=f"dps_best_{self.best.throws}")
+        return self.command_of(self.best.params, name=f"dps_best_{self.best.throws}")
 
     def best_policy(self, env) -> CommandPolicy:
         """The best θ as a policy playing in ``env``."""
