@@ -77,11 +77,12 @@ def test_bench_dps_prints_the_ratio_last():
 
 def test_hold_sweep_prints_a_row_per_cut():
     script = Path(__file__).resolve().parents[1] / "scripts" / "hold_sweep.py"
-    arguments = ["--duration", "6", "--seeds", "2", "--cuts", "0,0.3"]
+    arguments = ["--duration", "6", "--seeds", "2", "--cuts", "0,0.3", "--lead-in", "0.5"]
     result = subprocess.run(
         [sys.executable, str(script), *arguments], capture_output=True, text=True, timeout=120
     )
     assert result.returncode == 0, result.stderr
+    assert "lead-in 0.5 s" in result.stdout
     rows = [line.split() for line in result.stdout.strip().splitlines()[2:]]
     assert [row[:2] for row in rows] == [["0.000", "2.177"], ["0.300", "1.877"]]
     assert int(rows[0][2]) >= 2  # dps_best throws from the standard start within 6 s

@@ -105,9 +105,10 @@ class DPSTraining:
         ``algo.start``, with its pan and the lead-in ``algo.lead_in``, rolled out open loop in C."""
         algo = self.cfg.algo
         start = load_command(algo.start)
-        if not algo.lead_in >= 0:
-            raise ValueError(f"algo.lead_in={algo.lead_in} must be a number of seconds >= 0")
-        self.pan, self.lead_in = start.pan, float(algo.lead_in)
+        lead_in = algo.get("lead_in", 0.0)  # runs checkpointed before lead-ins had none
+        if not lead_in >= 0:
+            raise ValueError(f"algo.lead_in={lead_in} must be a number of seconds >= 0")
+        self.pan, self.lead_in = start.pan, float(lead_in)
         constraints = ViaPointConstraints.from_model(
             self.env.unwrapped.model, algo.min_cycle, algo.max_cycle, algo.min_gap
         )
