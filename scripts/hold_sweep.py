@@ -21,7 +21,7 @@ import math
 import sys
 from dataclasses import replace
 
-from jugglerl.commands import CommandError, load_command
+from jugglerl.commands import load_command
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl_envs import JuggleEnv
 
@@ -52,14 +52,13 @@ def main() -> None:
         if args.lead_in is not None:
             command = replace(command, lead_in=args.lead_in)
         variants = [command.shorten_hold(args.hold, cut) for cut in args.cuts]
-    except CommandError as error:
+        standard_env = JuggleEnv(duration=args.duration)
+        noisy_env = JuggleEnv(duration=args.duration, reset_noise=args.reset_noise)
+    except ValueError as error:  # a CommandError, or an env setting out of range
         sys.exit(f"hold_sweep.py: {error}")
 
     noisy_seeds = list(range(args.seeds))
-    with (
-        CommandRollouts(JuggleEnv(duration=args.duration)) as standard,
-        CommandRollouts(JuggleEnv(duration=args.duration, reset_noise=args.reset_noise)) as noisy,
-    ):
+    with CommandRollouts(standard_env) as standard, CommandRollouts(noisy_env) as noisy:
         nominal = standard.evaluate(variants, seeds=0)
         starts = noisy.evaluate(
             [variant for variant in variants for _ in noisy_seeds], noisy_seeds * len(variants)
