@@ -108,11 +108,9 @@ class ViaPointCommand:
             )
         times = self._times
         hold_end = times[index + 1] if index + 1 < len(times) else self.cycle + times[0]
-        if cut >= hold_end - times[index]:
-            raise CommandError(
-                f"cannot cut {cut} s from via-point {index}'s hold of"
-                f" {hold_end - times[index]:.3f} s"
-            )
+        hold = hold_end - times[index]
+        if cut >= hold:
+            raise CommandError(f"cannot cut {cut} s from via-point {index}'s hold of {hold:.3f} s")
         points = tuple(
             (t - cut if i > index else t, lift, elbow)
             for i, (t, lift, elbow) in enumerate(self.via_points)
