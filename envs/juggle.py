@@ -72,6 +72,7 @@ from jugglerl_envs.validation import check_choice, check_number, check_vector
 
 REWARDS = ("throws", "distance", "contacts", "juggle")
 DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
+MAX_RESET_NOISE = 0.05  # m: largest start offset of the ball (it must start above the cup)
 DISTANCE_SCALE = 0.05  # m: the distance reward is 1 within this distance of the cup
 CENTRING_SCALE = 0.1  # m: the juggle reward's centring term is 0 this far off the cup's axis
 CENTRING_WEIGHT = 0.01  # per step: 0.5 per second of a centred ball, about one throw's worth
@@ -115,7 +116,7 @@ class JuggleEnv(MujocoEnv):
         self.timestep = check_number("timestep", timestep, 0.0, 0.01, low_open=True)
         self.ball_radius = check_number("ball_radius", ball_radius, 0.01, 0.09)
         self.ball_mass = check_number("ball_mass", ball_mass, 0.0, 10.0, low_open=True)
-        self.reset_noise = check_number("reset_noise", reset_noise, 0.0, 0.05)
+        self.reset_noise = check_number("reset_noise", reset_noise, 0.0, MAX_RESET_NOISE)
         self.joint_speed_limit = (
             None
             if joint_speed_limit is None

@@ -161,7 +161,3 @@ class FeedbackTraining(DPSTraining):
 
     def _rollouts_with_reset_noise(self, reset_noise: float) -> FeedbackRollouts:
         return self._rollouts([{"reset_noise": reset_noise}])
-
-    def _nominal_throws(self) -> int:
-        """The score sums the conditions, so the standard start is replayed."""
-        return run_episode(self.env, self.best_policy(self.env), seed=0).throws

@@ -135,11 +135,19 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     assert [r["best_throws"] for r in history] == sorted(r["best_throws"] for r in history)
     best = load_command(tmp_path / "best_command.yaml")
     assert best == training.best_command() and best.lead_in == 0.5  # algo.lead_in's default
-    # the best command replays to its score in the env, from its roll-out's start
-    env = JuggleEnv(duration=8.0)
-    replay = run_episode(env, CommandPolicy(best, env), seed=training.best.seed)
+    # the search rolls out from offset starts (algo.reset_noise's default); the best command
+    # replays to its score from its roll-out's start, and the noise check replays the standard one
+    assert training.collector.rollouts.env.unwrapped.reset_noise == 0.01
+    noisy_env = JuggleEnv(duration=8.0, reset_noise=0.01)
+    replay = run_episode(noisy_env, CommandPolicy(best, noisy_env), seed=training.best.seed)
     assert replay.throws == metrics["best_throws"] > 0
-    assert metrics["noise_check"]["seeds"] == [0, 1]
+    env = JuggleEnv(duration=8.0)
+    check = metrics["noise_check"]
+    assert check["seeds"] == [0, 1]
+    assert check["nominal_throws"] == run_episode(env, CommandPolicy(best, env), seed=0).throws
+    assert check["fraction_of_best"] == pytest.approx(
+        sum(check["throws"]) / 2 / max(check["nominal_throws"], 1)
+    )
     rrd = tmp_path / "train.rrd"
     steps, values = column(rrd, "dps/best_throws", "Scalars:scalars", "step")
     assert steps.tolist() == [4, 8, 12] and values.ravel().tolist() == [
@@ -181,6 +189,7 @@ def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
         ("algo.update=elite algo.elite=50", "error: algo.elite=50 must be in [2, algo.rollouts=4]"),
         ("algo.start=missing.yaml", "error: no command file at missing.yaml"),
         ("algo.lead_in=-1", "error: algo.lead_in=-1 must be a number of seconds >= 0"),
+        ("algo.reset_noise=0.5", "error: algo.reset_noise=0.5 is out of range"),
         ("resume=nowhere", "error: resume: no checkpoint at nowhere"),
     ],
 )

@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 import torch
 from omegaconf import DictConfig, OmegaConf
@@ -45,6 +46,8 @@ from jugglerl.recording.blueprint import juggling_blueprint
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
+from jugglerl_envs.juggle import MAX_RESET_NOISE
+from jugglerl_envs.validation import check_number
 
 BEST_COMMAND = "best_command.yaml"
 METRICS = "metrics.json"
@@ -77,7 +80,7 @@ class DPSTraining:
             raise ValueError(
                 f"algo.elite={algo.elite} must be in [2, algo.rollouts={algo.rollouts}]"
             )
-        self.env = make_juggle_env(cfg.env)
+        self.env = self._search_env()
         start_params, stds, self.constraints, rollouts, decode = self._search_space()
         self.update: UpdateRule = make_update(
             algo["update"],  # item access: DictConfig.update is a method
@@ -98,6 +101,16 @@ class DPSTraining:
         self.best = BestCommand(start_params)
         self.history: list[dict] = []  # one record per episode
         self.recording_id: str | None = None
+
+    def _search_env(self) -> gym.Env:
+        """The env of the search's roll-outs: ``env`` with the ball's start offset
+        ``algo.reset_noise`` (each roll-out draws its own), so that the best command is one that
+        also juggles from imperfect starts. Without the key (``algo=feedback``, runs checkpointed
+        before it existed), ``env.reset_noise``."""
+        reset_noise = self.cfg.algo.get("reset_noise")
+        if reset_noise is not None:
+            check_number("algo.reset_noise", reset_noise, 0.0, MAX_RESET_NOISE)
+        return make_juggle_env(self.cfg.env, reset_noise=reset_noise)
 
     def _search_space(self):
         """What is searched: the start θ, its stds, the constraints, the roll-outs and how a θ
@@ -196,7 +209,7 @@ class DPSTraining:
             return
         root = join("best", f"{self.best.rollout:05d}")
         recorder = EpisodeRecorder(
-            make_juggle_env(self.cfg.env), logger.recording, root, self.cfg.logger.scene_fps
+            self._search_env(), logger.recording, root, self.cfg.logger.scene_fps
         )
         run_episode(recorder, self.best_policy(recorder), seed=self.best.seed)
         recorder.close()
@@ -212,8 +225,9 @@ class DPSTraining:
         line = self._headline(metrics)
         if check:
             line += (
-                f"; with {check['reset_noise']} m start noise: {check['mean_throws']:.1f} on"
-                f" average over {len(check['seeds'])} seeds"
+                f"; from the standard start: {check['nominal_throws']}; with"
+                f" {check['reset_noise']} m start noise: {check['mean_throws']:.1f} on average"
+                f" over {len(check['seeds'])} seeds ({check['fraction_of_best']:.0%})"
             )
         return line
 
@@ -273,24 +287,25 @@ class DPSTraining:
         their fraction of its throws from the standard start."""
         check = self.cfg.algo.noise_check
         best = self.collector.decode(self.best.params)
+        seeds = list(range(check.seeds))
         with self._rollouts_with_reset_noise(check.reset_noise) as rollouts:
-            seeds = list(range(check.seeds))
             throws = rollouts.evaluate([best] * len(seeds), seeds).throws
+        # the standard start is replayed: the best score came from one roll-out's own start
+        # (algo.reset_noise) or sums several conditions (algo=feedback)
+        with self._rollouts_with_reset_noise(0.0) as rollouts:
+            nominal = int(rollouts.evaluate([best], [0]).throws[0])
         return {
             "reset_noise": check.reset_noise,
             "seeds": seeds,
             "throws": throws.tolist(),
             "mean_throws": float(np.mean(throws)),
-            "fraction_of_best": float(np.mean(throws) / max(self._nominal_throws(), 1)),
+            "nominal_throws": nominal,
+            "fraction_of_best": float(np.mean(throws) / max(nominal, 1)),
         }
 
     def _rollouts_with_reset_noise(self, reset_noise: float) -> CommandRollouts:
         env = make_juggle_env(self.cfg.env, reset_noise=reset_noise)
         return CommandRollouts(env, nthread=self.cfg.algo.threads)
-
-    def _nominal_throws(self) -> int:
-        """The best θ's throws from the standard start: its score, here."""
-        return self.best.throws
 
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:
