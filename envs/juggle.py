@@ -24,7 +24,7 @@ the forearm level. The wrist joints are held at ``wrist_angles`` by their own se
 Cup position and velocity come from the kinematics of the last physics step (MuJoCo computes them
 before integrating), 2 ms older than the joint and ball states at the default timestep.
 
-## Reward (kwarg ``reward``)
+## Reward (kwarg ``reward``; one module each in ``jugglerl_envs.rewards``)
 - ``throws``: 1 for each throw (the ball crossing ``threshold`` going up in free flight, see
   ``jugglerl_envs.events``); the paper's reward 1 and the DPS objective.
 - ``distance``: inverse cup–ball distance, bounded: ``min(1, 0.05 m / distance)``
@@ -65,17 +65,14 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
-from jugglerl_envs import scene
+from jugglerl_envs import actions, scene
 from jugglerl_envs.events import JuggleEvents
 from jugglerl_envs.perturbations import BallKicks, scale_servo_gains
+from jugglerl_envs.rewards import REWARDS
 from jugglerl_envs.validation import check_choice, check_number, check_vector
 
-REWARDS = ("throws", "distance", "contacts", "juggle")
 DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
 MAX_RESET_NOISE = 0.05  # m: largest start offset of the ball (it must start above the cup)
-DISTANCE_SCALE = 0.05  # m: the distance reward is 1 within this distance of the cup
-CENTRING_SCALE = 0.1  # m: the juggle reward's centring term is 0 this far off the cup's axis
-CENTRING_WEIGHT = 0.01  # per step: 0.5 per second of a centred ball, about one throw's worth
 PAPER_HOME = (0.0, -1.5708, 2.15)  # rad: the paper preset (configs/env/paper.yaml)
 PAPER_WRIST = (-2.0, 1.5708, 0.0)
 
@@ -111,7 +108,8 @@ class JuggleEnv(MujocoEnv):
         self.gravity = check_number("gravity", gravity, -50.0, 0.0)
         self.duration = check_number("duration", duration, 0.0, 1e6, low_open=True)
         self.threshold = check_number("threshold", threshold, 0.0, 10.0, low_open=True)
-        self.reward_kind = check_choice("reward", reward, REWARDS)
+        self.reward_kind = reward
+        self._reward = REWARDS.get(reward)
         frame_skip = check_number("frame_skip", frame_skip, 1, 1000, integer=True)
         self.timestep = check_number("timestep", timestep, 0.0, 0.01, low_open=True)
         self.ball_radius = check_number("ball_radius", ball_radius, 0.01, 0.09)
@@ -175,9 +173,6 @@ class JuggleEnv(MujocoEnv):
         arm_root = m.body(scene.ARM_ROOT_BODY).id
         arm_bodies = [b for b in range(m.nbody) if self._has_ancestor(b, arm_root)]
         self._arm_geoms = np.flatnonzero(np.isin(m.geom_bodyid, arm_bodies))
-        ranges = m.actuator_ctrlrange[:3]
-        self._ctrl_centre = ranges.mean(axis=1)
-        self._ctrl_half_range = (ranges[:, 1] - ranges[:, 0]) / 2
         self._site_velocity = np.zeros(6)
 
     def _has_ancestor(self, body: int, ancestor: int) -> bool:
@@ -186,14 +181,15 @@ class JuggleEnv(MujocoEnv):
         return body == ancestor
 
     # --- action mapping ---------------------------------------------------------------------
-    def action_to_ctrl(self, action: np.ndarray) -> np.ndarray:
-        """Servo setpoints (rad) for a normalised action in [-1, 1] (clipped)."""
-        clipped = np.minimum(np.maximum(action, -1.0), 1.0)  # np.clip is slow on tiny arrays
-        return self._ctrl_centre + clipped * self._ctrl_half_range
+    @staticmethod
+    def action_to_ctrl(action: np.ndarray) -> np.ndarray:
+        """Servo setpoints (rad) for a normalised action in [-1, 1] (``jugglerl_envs.actions``)."""
+        return actions.action_to_ctrl(action)
 
-    def ctrl_to_action(self, ctrl: np.ndarray) -> np.ndarray:
+    @staticmethod
+    def ctrl_to_action(ctrl: np.ndarray) -> np.ndarray:
         """Normalised action for servo setpoints in radians (inverse of ``action_to_ctrl``)."""
-        return ((np.asarray(ctrl) - self._ctrl_centre) / self._ctrl_half_range).astype(np.float32)
+        return actions.ctrl_to_action(ctrl)
 
     # --- episode ----------------------------------------------------------------------------
     def reset_model(self) -> np.ndarray:
@@ -238,7 +234,7 @@ class JuggleEnv(MujocoEnv):
         self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
 
         obs = self._get_obs()
-        reward = self._reward(throws)
+        reward = self._reward(self, throws)
         terminated = bool(self._physics_error) or height < DROP_HEIGHT
         truncated = self._steps >= self._max_steps and not terminated
         if self.render_mode == "human":
@@ -315,29 +311,21 @@ class JuggleEnv(MujocoEnv):
         )
         return self._site_velocity[3:]
 
-    def _ball_arm_contacts(self) -> int:
+    def ball_arm_contacts(self) -> int:
+        """Contacts between the ball and the arm (links and cup plates) after the last step."""
         contacts = self.data.contact
         geoms = np.stack([contacts.geom1, contacts.geom2], axis=1)
         with_ball = (geoms == self._ball_geom).any(axis=1)
         other = np.where(geoms[:, 0] == self._ball_geom, geoms[:, 1], geoms[:, 0])
         return int(np.isin(other[with_ball], self._arm_geoms).sum())
 
-    def _reward(self, throws: int) -> float:
-        if self.reward_kind == "throws":
-            return float(throws)
-        if self.reward_kind == "distance":
-            ball = self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
-            distance = np.linalg.norm(ball - self.data.site_xpos[self._cup_site])
-            return float(min(1.0, DISTANCE_SCALE / max(distance, 1e-9)))
-        if self.reward_kind == "contacts":
-            return float(self._ball_arm_contacts())
-        return throws + CENTRING_WEIGHT * self._centring()
+    def ball_position(self) -> np.ndarray:
+        """The ball's centre (m, world frame)."""
+        return self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
 
-    def _centring(self) -> float:
-        """1 with the ball straight above (or below) the cup, falling to 0 at ``CENTRING_SCALE``."""
-        ball = self.data.qpos[self._ball_qpos : self._ball_qpos + 2]
-        offset = np.linalg.norm(ball - self.data.site_xpos[self._cup_site, :2])
-        return max(0.0, 1.0 - offset / CENTRING_SCALE)
+    def cup_position(self) -> np.ndarray:
+        """The cup's throat (site ``cup``, m, world frame), from the last physics step."""
+        return self.data.site_xpos[self._cup_site]
 
     def _get_obs(self) -> np.ndarray:
         d = self.data

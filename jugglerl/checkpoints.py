@@ -1,7 +1,9 @@
 """Checkpoint files shared by every training algorithm: written atomically, read with clear errors.
 
-A checkpoint is a dict saved with ``torch.save``; it always holds the run's resolved ``config``
-(so ``config["algo"]["name"]`` says which training loop can resume it).
+A checkpoint is a dict saved with ``torch.save``. It always holds the run's resolved ``config``
+(``config["algo"]["trainer"]`` says which training loop resumes it) and ``deploys``, what the run
+deploys as a policy: ``"actor"`` (the network in the checkpoint, whatever loss trained it) or the
+name of a policy file in the run directory (a search's best command or feedback policy).
 """
 
 from __future__ import annotations
@@ -32,11 +34,6 @@ def load_checkpoint(path: str | Path) -> dict:
         state = torch.load(path, weights_only=False)
     except Exception as error:  # torch raises many kinds on a damaged file
         raise ValueError(f"{path} is not a readable checkpoint ({error})") from None
-    if not isinstance(state, dict) or "algo" not in state.get("config", {}):
+    if not isinstance(state, dict) or "deploys" not in state or "config" not in state:
         raise ValueError(f"{path} is not a JuggleRL training checkpoint")
     return state
-
-
-def checkpoint_algo(state: dict) -> str:
-    """Name of the algorithm (``dps``, ``ddpg``) that wrote ``state``."""
-    return state["config"]["algo"]["name"]

@@ -13,8 +13,9 @@ cycle. The ball is dropped into the cup at the start; without a lead-in the firs
 soon as the cycle says, before the dropped ball has settled, and an off-centre drop then often
 loses it in the first throws even where the cycle itself is stable.
 
-File format (YAML or JSON, same keys)::
+File format (a policy file of ``kind: command``, YAML or JSON; ``jugglerl.policies.command``)::
 
+    kind: command
     name: expert
     cycle: 3.0            # d, seconds
     pan: 0.0              # optional, radians
@@ -26,17 +27,14 @@ File format (YAML or JSON, same keys)::
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
-import yaml
 
-COMMANDS_PACKAGE = "jugglerl.configs"
-COMMANDS_FOLDER = "commands"
+KIND = "command"
+KEYS = ("kind", "name", "cycle", "pan", "lead_in", "via_points")
 
 
 class CommandError(ValueError):
@@ -118,7 +116,9 @@ class ViaPointCommand:
         return replace(self, cycle=self.cycle - cut, via_points=points)
 
     def to_dict(self) -> dict:
+        """The file format's mapping (``kind: command``)."""
         return {
+            "kind": KIND,
             "name": self.name,
             "cycle": self.cycle,
             "pan": self.pan,
@@ -133,12 +133,9 @@ def command_from_dict(data: dict, source: str = "command") -> ViaPointCommand:
         raise CommandError(
             f"{source}: expected a mapping with keys cycle, via_points (and pan, lead_in)"
         )
-    unknown = set(data) - {"name", "cycle", "pan", "lead_in", "via_points"}
+    unknown = set(data) - set(KEYS)
     if unknown:
-        raise CommandError(
-            f"{source}: unknown keys {sorted(unknown)};"
-            " valid: name, cycle, pan, lead_in, via_points"
-        )
+        raise CommandError(f"{source}: unknown keys {sorted(unknown)}; valid: {', '.join(KEYS)}")
     for key in ("cycle", "via_points"):
         if key not in data:
             raise CommandError(f"{source}: missing key '{key}'")
@@ -156,32 +153,3 @@ def command_from_dict(data: dict, source: str = "command") -> ViaPointCommand:
         return ViaPointCommand(cycle, points, pan, lead_in, name=name)
     except CommandError as error:
         raise CommandError(f"{source}: {error}") from None
-
-
-def named_command_path(name: str) -> Path:
-    """Path of a command shipped in ``configs/commands/`` (e.g. ``expert``)."""
-    return Path(str(resources.files(COMMANDS_PACKAGE).joinpath(COMMANDS_FOLDER, f"{name}.yaml")))
-
-
-def load_command(name_or_path: str | Path) -> ViaPointCommand:
-    """Load a command by shipped name (``expert``) or from a ``.yaml``/``.yml``/``.json`` file."""
-    path = Path(name_or_path)
-    if path.suffix.lower() not in (".yaml", ".yml", ".json"):
-        path = named_command_path(str(name_or_path))
-    if not path.is_file():
-        raise CommandError(f"no command file at {path}")
-    try:
-        text = path.read_text()
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except (json.JSONDecodeError, yaml.YAMLError) as error:
-        raise CommandError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from None
-    return command_from_dict(data, str(path))
-
-
-def save_command(command: ViaPointCommand, path: str | Path) -> Path:
-    """Write ``command`` as YAML (or JSON for a ``.json`` path)."""
-    path = Path(path)
-    data = command.to_dict()
-    text = json.dumps(data, indent=2) if path.suffix.lower() == ".json" else yaml.safe_dump(data)
-    path.write_text(text)
-    return path

@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import gymnasium as gym
-import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl_envs import JuggleEnv
@@ -22,9 +19,3 @@ def make_juggle_env(env_cfg: DictConfig, **overrides) -> gym.Env:
         return JuggleEnv(**kwargs)
     except TypeError as error:  # an unknown key in the env group
         raise ValueError(f"env config: {error}") from None
-
-
-def action_mapping(env_cfg: DictConfig) -> Callable[[np.ndarray], np.ndarray]:
-    """The env's map from servo setpoints (rad) to normalised actions (``ctrl_to_action``), for
-    modules that play commands inside networks (residual actor, expert-centred exploration)."""
-    return make_juggle_env(env_cfg).unwrapped.ctrl_to_action

@@ -3,34 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Protocol
 
 import gymnasium as gym
 import numpy as np
 
-from jugglerl.commands import ViaPointCommand
-
-
-class Policy(Protocol):
-    """Anything that maps an observation and the episode time (s) to a normalised action."""
-
-    def reset(self) -> None: ...
-
-    def act(self, observation: np.ndarray, time: float) -> np.ndarray: ...
-
-
-class CommandPolicy:
-    """Plays an open-loop ``ViaPointCommand`` in an env: ignores the observation, reads the time."""
-
-    def __init__(self, command: ViaPointCommand, env: gym.Env):
-        self.command = command
-        self._to_action = env.unwrapped.ctrl_to_action
-
-    def reset(self) -> None:
-        """Open loop: nothing to forget between episodes."""
-
-    def act(self, observation: np.ndarray, time: float) -> np.ndarray:
-        return self._to_action(self.command.setpoints(time))
+from jugglerl.policies import Policy
 
 
 @dataclass

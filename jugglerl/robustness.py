@@ -12,19 +12,16 @@ others keep there. ``markdown``/``plot`` render them for the README and the run 
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Iterable, Mapping
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import torch
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import Policy, run_episode
-from jugglerl.policies import load_policy
+from jugglerl.episode_pool import EpisodePool, EpisodeTask
+from jugglerl.policies.loading import load_policy
 
 NOMINAL = "nominal"
 
@@ -98,31 +95,6 @@ def conditions(families: Iterable[Family]) -> list[Condition]:
 
 
 # --- episodes, in worker processes -------------------------------------------------------------
-_worker_env_cfg: DictConfig | None = None
-_worker_policies: dict[str, Policy] = {}
-
-
-def _start_worker(env_cfg: dict) -> None:
-    global _worker_env_cfg
-    _worker_env_cfg = OmegaConf.create(env_cfg)
-    torch.set_num_threads(1)  # one thread per worker: the workers are the parallelism
-
-
-def _run(task: tuple[str, dict, int, float]) -> tuple[int, float]:
-    """(throws, seconds the ball stayed up) of one episode.
-
-    Policies are loaded once per worker: perturbations leave the action mapping they depend on
-    (the actuators' control ranges) unchanged.
-    """
-    spec, overrides, seed, duration = task
-    env = make_juggle_env(_worker_env_cfg, duration=duration, **overrides)
-    if spec not in _worker_policies:
-        _worker_policies[spec] = load_policy(spec, env)
-    metrics = run_episode(env, _worker_policies[spec], seed=seed)
-    env.close()
-    return metrics.throws, metrics.duration
-
-
 def check_policies(policies: Iterable[str], env_cfg: DictConfig) -> None:
     """Load each policy once here, so that a bad name fails before any work (``ValueError``)."""
     env = make_juggle_env(env_cfg)
@@ -150,19 +122,14 @@ def measure(
         raise ValueError(f"seeds={seeds} must be >= 1")
     check_policies(policies, env_cfg)
     plan = [(spec, condition) for condition in conditions(families) for spec in policies]
+    base = {**OmegaConf.to_container(env_cfg, resolve=True), "duration": duration}
     tasks = [
-        (spec, dict(condition.overrides), seed, duration)
+        EpisodeTask({**base, **condition.overrides}, spec, seed)
         for spec, condition in plan
         for seed in range(seeds)
     ]
-    workers = workers or os.cpu_count() or 1
-    env_dict = OmegaConf.to_container(env_cfg, resolve=True)
-    with ProcessPoolExecutor(workers, initializer=_start_worker, initargs=(env_dict,)) as pool:
-        results = []
-        for result in pool.map(_run, tasks, chunksize=1):
-            results.append(result)
-            if on_episode is not None:
-                on_episode()
+    with EpisodePool(workers) as pool:
+        results = pool.run(tasks, None if on_episode is None else lambda _: on_episode())
     records = []
     for index, (spec, condition) in enumerate(plan):
         episodes = results[index * seeds : (index + 1) * seeds]
@@ -171,8 +138,8 @@ def measure(
                 "policy": spec,
                 "family": condition.family,
                 "magnitude": condition.magnitude,
-                "throws": [throws for throws, _ in episodes],
-                "seconds_up": [seconds for _, seconds in episodes],
+                "throws": [episode.throws for episode in episodes],
+                "seconds_up": [episode.duration for episode in episodes],
             }
         )
     return records
@@ -183,9 +150,7 @@ def summarise(records: list[dict]) -> list[dict]:
     """Rows with ``mean_throws``, ``fraction_of_nominal`` (of the policy's own nominal mean
     throws; ``None`` when that is 0) and ``mean_seconds_up`` (time to drop; a kept ball counts
     the whole episode)."""
-    nominal = {
-        r["policy"]: float(np.mean(r["throws"])) for r in records if r["family"] == NOMINAL
-    }
+    nominal = {r["policy"]: float(np.mean(r["throws"])) for r in records if r["family"] == NOMINAL}
     rows = []
     for record in records:
         mean_throws = float(np.mean(record["throws"]))

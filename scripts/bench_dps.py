@@ -20,10 +20,10 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from jugglerl.commands import load_command
 from jugglerl.dps.distribution import sample_commands
 from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
+from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
 

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from jugglerl.evaluation import run_episode
-from jugglerl.policies import load_policy
+from jugglerl.policies.loading import load_policy
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl_envs import JuggleEnv

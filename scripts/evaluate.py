@@ -1,6 +1,7 @@
 """Evaluate a policy for one episode: ``metrics.json`` and ``episode.rrd`` in the run directory.
 
-python scripts/evaluate.py policy=expert
+python scripts/evaluate.py policy=closed_loop            # a shipped policy (assets/policies/)
+python scripts/evaluate.py policy=outputs/train/ddpg/<run>  # what a training run deploys
 python scripts/evaluate.py policy=path/to/command.yaml env=earth seed=3 duration=60
 python scripts/evaluate.py policy=expert hydra.run.dir=outputs/my_eval
 rerun outputs/my_eval/episode.rrd      # watch it: 3D scene, ball height, throws
@@ -17,10 +18,9 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import run_episode
-from jugglerl.policies import load_policy
+from jugglerl.policies.loading import load_policy
 from jugglerl.recording.blueprint import juggling_blueprint
-from jugglerl.recording.episode import EpisodeRecorder
+from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import EVAL
 
@@ -38,15 +38,13 @@ def main(cfg: DictConfig) -> None:
         logger.log_hparams(cfg)
         logger.send_blueprint(juggling_blueprint(metric_groups=[EVAL]))
         try:
-            recorder = EpisodeRecorder(env, logger.recording, scene_fps=cfg.logger.scene_fps)
+            metrics = record_episode(
+                env, policy, logger.recording, seed=int(cfg.seed), scene_fps=cfg.logger.scene_fps
+            )
         except ValueError as error:
             sys.exit(f"error: logger.{error}")
-        try:
-            metrics = run_episode(recorder, policy, seed=int(cfg.seed))
         except KeyboardInterrupt:
             sys.exit(f"interrupted: the episode so far is in {logger.path}")
-        finally:
-            recorder.close()  # sends what is buffered, closes the env
         logger.log_metrics({f"{EVAL}/{key}": value for key, value in metrics.scalars().items()}, 0)
 
     (run_dir / "metrics.json").write_text(json.dumps(metrics.to_dict(), indent=2) + "\n")

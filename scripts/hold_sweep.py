@@ -21,8 +21,8 @@ import math
 import sys
 from dataclasses import replace
 
-from jugglerl.commands import load_command
 from jugglerl.dps.rollouts import CommandRollouts
+from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
 

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from jugglerl.commands import CommandError, ViaPointCommand, load_command, save_command
-from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.commands import CommandError, ViaPointCommand
+from jugglerl.evaluation import run_episode
+from jugglerl.policies.command import CommandPolicy, load_command, save_command
 from jugglerl_envs import JuggleEnv
 
 
@@ -60,9 +61,11 @@ def test_malformed_command_file_gives_a_clear_error(tmp_path, content, message):
     assert message in str(error.value) and str(path) in str(error.value)
 
 
-def test_missing_command_names_the_path(tmp_path):
-    with pytest.raises(CommandError, match="no command file at"):
+def test_missing_command_names_the_path_and_the_shipped_ones(tmp_path):
+    with pytest.raises(CommandError, match="no policy file at .*shipped policies: closed_loop,"):
         load_command("no_such_command")
+    with pytest.raises(CommandError, match="kind='feedback' is not a command"):
+        load_command("closed_loop")
     with pytest.raises(CommandError, match="not valid JSON"):
         (tmp_path / "c.json").write_text("{")
         load_command(tmp_path / "c.json")
@@ -95,6 +98,6 @@ def test_shorten_hold_refuses_what_cannot_be_cut(index, cut, message):
 
 def test_expert_juggles_at_least_seven_throws_in_the_paper_preset():
     env = JuggleEnv()
-    metrics = run_episode(env, CommandPolicy(load_command("expert"), env), seed=0)
+    metrics = run_episode(env, CommandPolicy(load_command("expert")), seed=0)
     assert metrics.throws >= 7
     assert metrics.catches >= metrics.throws

@@ -7,11 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jugglerl.commands import ViaPointCommand, load_command
+from jugglerl.commands import ViaPointCommand
 from jugglerl.dps.distribution import sample_commands
 from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.evaluation import run_episode
+from jugglerl.policies.command import CommandPolicy, load_command
 from jugglerl_envs import JuggleEnv
 
 
@@ -28,7 +29,7 @@ def test_batched_throws_and_drops_equal_the_envs():
     with CommandRollouts(env, nthread=2) as rollouts:
         results = rollouts.evaluate(commands, seeds)
     reference = [
-        run_episode(env, CommandPolicy(command, env), seed=seed)
+        run_episode(env, CommandPolicy(command), seed=seed)
         for command, seed in zip(commands, seeds, strict=True)
     ]
     assert results.throws.tolist() == [m.throws for m in reference]
@@ -41,7 +42,7 @@ def test_batched_throws_and_drops_equal_the_envs():
 def test_rate_limited_controls_are_the_setpoints_the_env_applies():
     env = JuggleEnv(gravity=-9.81, joint_speed_limit=3.14159, duration=4.0)
     command = load_command("expert")
-    policy = CommandPolicy(command, env)
+    policy = CommandPolicy(command)
     observation, info = env.reset(seed=0)
     applied = []
     for _ in range(200):

@@ -4,8 +4,8 @@ import math
 
 import pytest
 import torch
+from omegaconf import OmegaConf
 
-from jugglerl.commands import load_command
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.params import (
     ViaPointConstraints,
@@ -13,14 +13,12 @@ from jugglerl.dps.params import (
     component_stds,
     params_to_command,
 )
-from jugglerl.dps.updates import (
-    Elite,
-    EpisodicREPS,
-    Greedy,
-    RewardWeighted,
-    ereps_weights,
-    make_update,
-)
+from jugglerl.dps.updates import UPDATES, make_update
+from jugglerl.dps.updates.elite import Elite
+from jugglerl.dps.updates.ereps import EpisodicREPS, ereps_weights
+from jugglerl.dps.updates.greedy import Greedy
+from jugglerl.dps.updates.weighted import RewardWeighted
+from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
 CONSTRAINTS = ViaPointConstraints(
@@ -194,9 +192,12 @@ def test_ereps_with_equal_returns_or_a_loose_bound():
 
 
 def test_make_update_names_the_valid_choices():
-    stds = torch.ones(4)
-    assert isinstance(
-        make_update("ereps", stds, elite=5, epsilon=2, min_std_scale=0.5), EpisodicREPS
+    algo = OmegaConf.create(
+        {"update": "ereps", "elite": 5, "rollouts": 10, "epsilon": 2.0, "min_std_scale": 0.5}
     )
-    with pytest.raises(ValueError, match="not one of greedy, weighted, elite, ereps"):
-        make_update("adam", stds, elite=5, epsilon=2, min_std_scale=0.5)
+    rule = make_update(algo, torch.ones(4))
+    assert isinstance(rule, EpisodicREPS) and torch.equal(rule.min_stds, torch.full((4,), 0.5))
+    assert UPDATES.names() == ("elite", "ereps", "greedy", "weighted")
+    algo.update = "adam"
+    with pytest.raises(ValueError, match="algo.update='adam' is not available; choose one of"):
+        make_update(algo, torch.ones(4))

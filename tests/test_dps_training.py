@@ -8,7 +8,6 @@ import torch
 from cli import interrupt_train, rrd_verifies, run_train, train_config
 
 from jugglerl.checkpoints import load_checkpoint
-from jugglerl.commands import load_command
 from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import PAPER_STDS, SearchDistribution
 from jugglerl.dps.params import (
@@ -16,8 +15,9 @@ from jugglerl.dps.params import (
     params_to_command,
 )
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.dps.training import DPSTraining
-from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.dps.training import SearchTraining
+from jugglerl.evaluation import run_episode
+from jugglerl.policies.command import CommandPolicy, load_command
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column
 from jugglerl_envs import JuggleEnv
@@ -31,12 +31,25 @@ SHORT = [
 ]
 
 
+class CommandSpace:
+    """The least a collector needs of a search space: via-point constraints and commands."""
+
+    def __init__(self, env: JuggleEnv):
+        self.constraints = ViaPointConstraints.from_model(env.model, 1.0, 5.0, 0.1)
+
+    def project(self, params):
+        return self.constraints.project(params)
+
+    def decode(self, params):
+        return params_to_command(params)
+
+
 def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
     env = JuggleEnv(duration=8.0)
     return DPSCollector(
+        CommandSpace(env),
         CommandRollouts(env, nthread=2),
         SearchDistribution.around(load_command("expert"), PAPER_STDS),
-        ViaPointConstraints.from_model(env.model, 1.0, 5.0, 0.1),
         frames_per_batch=4,
         total_frames=total,
         seed=seed,
@@ -94,10 +107,8 @@ def test_collector_state_restores_the_same_samples():
     assert torch.equal(expected["throws"], again["throws"])
 
 
-def run_training(cfg, run_dir: Path, state: dict | None = None) -> tuple[dict, DPSTraining]:
-    training = DPSTraining(cfg, run_dir)
-    if state is not None:
-        training.load_state_dict(state)
+def run_training(cfg, run_dir: Path, state: dict | None = None) -> tuple[dict, SearchTraining]:
+    training = SearchTraining(cfg, run_dir, state)
     with RerunLogger.from_config(cfg.logger, run_dir) as logger:
         metrics = training.run(logger, progress=False)
     training.close()
@@ -134,17 +145,18 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     assert metrics["best_throws"] == max(r["max_throws"] for r in history)
     assert [r["best_throws"] for r in history] == sorted(r["best_throws"] for r in history)
     best = load_command(tmp_path / "best_command.yaml")
-    assert best == training.best_command() and best.lead_in == 0.5  # algo.lead_in's default
+    assert best == training.space.decode(training.best.params)
+    assert best.lead_in == 0.5  # algo.lead_in's default
     # the search rolls out from offset starts (algo.reset_noise's default); the best command
     # replays to its score from its roll-out's start, and the noise check replays the standard one
     assert training.collector.rollouts.env.unwrapped.reset_noise == 0.01
     noisy_env = JuggleEnv(duration=8.0, reset_noise=0.01)
-    replay = run_episode(noisy_env, CommandPolicy(best, noisy_env), seed=training.best.seed)
+    replay = run_episode(noisy_env, CommandPolicy(best), seed=training.best.seed)
     assert replay.throws == metrics["best_throws"] > 0
     env = JuggleEnv(duration=8.0)
     check = metrics["noise_check"]
     assert check["seeds"] == [0, 1]
-    assert check["nominal_throws"] == run_episode(env, CommandPolicy(best, env), seed=0).throws
+    assert check["nominal_throws"] == run_episode(env, CommandPolicy(best), seed=0).throws
     assert check["fraction_of_best"] == pytest.approx(
         sum(check["throws"]) / 2 / max(check["nominal_throws"], 1)
     )
@@ -185,10 +197,11 @@ def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
 @pytest.mark.parametrize(
     "override, message",
     [
-        ("algo.update=adam", "error: algo.update='adam' is not one of greedy, weighted, elite"),
-        ("algo.update=elite algo.elite=50", "error: algo.elite=50 must be in [2, algo.rollouts=4]"),
-        ("algo.start=missing.yaml", "error: no command file at missing.yaml"),
-        ("algo.lead_in=-1", "error: algo.lead_in=-1 must be a number of seconds >= 0"),
+        ("algo.update=adam", "error: algo.update='adam' is not available; choose one of elite,"),
+        ("algo.update=elite algo.elite=50", "error: algo.elite=50 must be <= algo.rollouts=4"),
+        ("algo.start=missing.yaml", "error: no policy file at missing.yaml; shipped policies:"),
+        ("algo.lead_in=-1", "error: algo.lead_in=-1 is out of range"),
+        ("algo.space=joint", "error: algo.space='joint' is not available; choose one of"),
         ("algo.reset_noise=0.5", "error: algo.reset_noise=0.5 is out of range"),
         ("resume=nowhere", "error: resume: no checkpoint at nowhere"),
     ],

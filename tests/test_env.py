@@ -82,11 +82,10 @@ def test_contacts_reward_counts_ball_arm_contacts(hold):
 
 
 def test_throws_reward_pays_one_per_counted_throw():
-    from jugglerl.commands import load_command
-    from jugglerl.evaluation import CommandPolicy
+    from jugglerl.policies.command import CommandPolicy, load_command
 
     env = JuggleEnv(duration=10.0)
-    policy = CommandPolicy(load_command("expert"), env)
+    policy = CommandPolicy(load_command("expert"))
     obs, info = env.reset(seed=0)
     total, done = 0.0, False
     while not done:
@@ -132,7 +131,7 @@ def test_bad_physics_terminates_with_error_instead_of_raising(hold):
     [
         (
             {"reward": "style"},
-            "reward='style' is not valid: choose one of throws, distance, contacts",
+            "reward='style' is not available; choose one of contacts, distance, juggle, throws",
         ),
         ({"gravity": 3.0}, "gravity=3.0 is out of range"),
         ({"frame_skip": 0}, "frame_skip=0 is out of range"),

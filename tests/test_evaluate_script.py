@@ -47,13 +47,13 @@ def test_evaluate_replays_a_command_file(tmp_path):
 
 def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
     for override, message in [
-        ("policy=missing_command", "error: no command file at"),
+        ("policy=missing_command", "error: no policy file at"),
         (
             "env.reward=style",
-            "error: reward='style' is not valid: choose one of throws, distance, contacts",
+            "error: reward='style' is not available; choose one of contacts, distance, juggle,",
         ),
     ]:
         result = run_evaluate(override, f"hydra.run.dir={tmp_path}")
         assert result.returncode != 0
-        assert result.stderr.strip().startswith(message)
+        assert result.stderr.strip().startswith(message), result.stderr
         assert "Traceback" not in result.stderr

@@ -7,23 +7,22 @@ import numpy as np
 import pytest
 import torch
 import yaml
-from cli import run_script, run_train
+from cli import run_script, run_train, train_config
 
-from jugglerl.commands import CommandError, load_command
+from jugglerl.commands import CommandError
 from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import CommandPolicy, run_episode
-from jugglerl.feedback import (
+from jugglerl.dps.spaces.feedback_gains import FeedbackGainSpace, FeedbackRollouts
+from jugglerl.evaluation import run_episode
+from jugglerl.policies.command import CommandPolicy, load_command
+from jugglerl.policies.feedback import (
     LOCK_HEIGHT,
     PARAM_NAMES,
     FeedbackGains,
     FeedbackPolicy,
-    feedback_policy_path,
-    load_feedback_policy,
     save_feedback_policy,
     steer,
 )
-from jugglerl.feedback_training import FeedbackRollouts, GainBounds
-from jugglerl.policies import load_policy
+from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
 
 OPEN_LOOP = FeedbackGains(0.5, 0.0, 0.0, 1.0, 0.0, 0.0)
@@ -42,7 +41,7 @@ def falling_ball(height: float, x: float = 0.0, vz: float = -1.0) -> np.ndarray:
 def test_without_gains_it_plays_the_command_open_loop(lead_in):
     env = JuggleEnv(duration=6.0)
     command = replace(load_command("dps_best"), lead_in=lead_in)
-    closed, plain = FeedbackPolicy(command, OPEN_LOOP, env), CommandPolicy(command, env)
+    closed, plain = FeedbackPolicy(command, OPEN_LOOP, env), CommandPolicy(command)
     obs, info = env.reset(seed=0)
     closed.reset()
     for _ in range(300):
@@ -117,25 +116,31 @@ def test_policy_files_round_trip_and_bad_ones_are_named(tmp_path):
     env = JuggleEnv()
     gains = FeedbackGains(0.58, 0.9, 0.3, 0.98, -0.02, 0.01)
     path = save_feedback_policy(tmp_path / "p.yaml", load_command("expert"), gains, "mine")
-    assert feedback_policy_path(str(path)) == path
-    assert load_feedback_policy(path, env).gains == gains
-    assert feedback_policy_path("expert") is None  # a command, not a closed-loop policy
+    assert load_policy(str(path), env).gains == gains
+    assert not isinstance(load_policy("expert", env), FeedbackPolicy)  # a command
     data = yaml.safe_load(path.read_text())
     del data["feedback"]["decay"]
     data["feedback"]["gain"] = 1.0
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump({**data, "feedback": data["feedback"]}))
     with pytest.raises(CommandError, match="bad.yaml: feedback needs exactly the keys"):
-        load_feedback_policy(tmp_path / "bad.yaml", env)
+        load_policy(str(tmp_path / "bad.yaml"), env)
+
+
+def gain_space(bounds: dict) -> FeedbackGainSpace:
+    cfg = train_config("algo=feedback")
+    cfg.algo.bounds = bounds
+    cfg.algo.start = {name: 0.5 for name in PARAM_NAMES}
+    return FeedbackGainSpace(cfg)
 
 
 def test_gain_bounds_clip_samples_and_name_what_is_missing():
-    bounds = GainBounds.from_config({name: [0.0, 1.0] for name in PARAM_NAMES})
+    space = gain_space({name: [0.0, 1.0] for name in PARAM_NAMES})
     params = torch.tensor([-1.0, 0.5, 2.0, 1.0, 0.0, 0.3], dtype=torch.float64)
     expected = ["land_phase=-1 outside [0, 1]", "land_gain=2 outside [0, 1]"]
-    assert bounds.violations(params) == expected
-    assert bounds.violations(bounds.project(params)) == []
+    assert space.violations(params) == expected
+    assert space.violations(space.project(params)) == []
     with pytest.raises(ValueError, match="missing \\['decay'\\]"):
-        GainBounds.from_config({name: [0, 1] for name in PARAM_NAMES if name != "decay"})
+        gain_space({name: [0, 1] for name in PARAM_NAMES if name != "decay"})
 
 
 def test_rollouts_sum_the_throws_over_the_conditions():
@@ -176,7 +181,7 @@ def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
     assert "feedback (ereps): best gains scored" in result.stdout
     evaluated = run_script(
         "evaluate.py",
-        f"policy={run_dir / 'best_policy.yaml'}",
+        f"policy={run_dir}",  # the run deploys its best_policy.yaml
         "env.duration=10",
         f"hydra.run.dir={tmp_path / 'eval'}",
     )

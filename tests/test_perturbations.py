@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from jugglerl.commands import load_command
 from jugglerl.dps.rollouts import CommandRollouts
+from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
-from jugglerl_envs.juggle import CENTRING_WEIGHT
+from jugglerl_envs.rewards.juggle import CENTRING_WEIGHT
 
 
 def elbow_after_a_setpoint_jump(servo_gain: float) -> float:

@@ -13,8 +13,8 @@ import pytest
 from rerun.chunk import RrdReader
 from test_evaluate_script import run_evaluate
 
-from jugglerl.commands import load_command
-from jugglerl.evaluation import CommandPolicy, run_episode
+from jugglerl.evaluation import run_episode
+from jugglerl.policies.command import CommandPolicy, load_command
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column, entities, timelines
@@ -160,7 +160,7 @@ def record_expert(tmp_path: Path, duration: float, scene_fps: float = 50.0, root
 
     with RerunLogger("episode", tmp_path) as logger:
         recorder = EpisodeRecorder(env, logger.recording, root=root, scene_fps=scene_fps)
-        metrics = run_episode(recorder, Tracing(load_command("expert"), env), seed=0)
+        metrics = run_episode(recorder, Tracing(load_command("expert")), seed=0)
     return logger.path, metrics, np.array(trajectory)
 
 

@@ -1,12 +1,14 @@
-"""Direct Policy Search over open-loop via-point commands (the paper's first method).
+"""Direct Policy Search (the paper's first method), over pluggable search spaces.
 
-- ``params``: the flat θ layout of a command and the constraints samples are projected onto;
+- ``spaces``: what θ is (``via_points``: an open-loop command; ``feedback_gains``: the gains of
+  the closed-loop ``FeedbackPolicy``), its constraints and its roll-outs;
+- ``params``: the flat θ layout of a via-point command and its constraints;
 - ``distribution.SearchDistribution``: the Gaussian N(θ̃, Σ) the search samples from;
 - ``updates``: greedy, reward-weighted, elite and episodic-REPS refits of that distribution;
 - ``rollouts.CommandRollouts``: batches of commands evaluated in C at raw physics speed, throws
   counted exactly as the env counts them;
 - ``collector.DPSCollector``: the TorchRL collector that yields a batch of scored samples per
   iteration;
-- ``training.DPSTraining``: the loop behind ``scripts/train.py algo=dps`` (best command,
+- ``training.SearchTraining``: the loop behind ``scripts/train.py algo=dps|feedback`` (best θ,
   checkpoints, logging).
 """

@@ -1,11 +1,11 @@
 """``DPSCollector``: Direct Policy Search as a TorchRL collector.
 
-Each iteration samples ``frames_per_batch`` parameter vectors θ from the current search
-distribution, rolls them out (their commands at raw physics speed with ``CommandRollouts``, or
-closed-loop feedback gains with ``jugglerl.feedback_training.FeedbackRollouts``) and yields a
-``[frames_per_batch]`` TensorDict:
+Each iteration samples ``frames_per_batch`` parameter vectors θ of a search space
+(``jugglerl.dps.spaces``) from the current search distribution, projects them onto the space's
+constraints, rolls their decoded candidates out (commands at raw physics speed, or closed-loop
+policies in worker processes) and yields a ``[frames_per_batch]`` TensorDict:
 
-- ``params`` (float64, ``[1 + 3p]``): θ, laid out as in ``jugglerl.dps.params``;
+- ``params`` (float64, ``[n]``): θ, laid out as the space defines it;
 - ``return`` (float64): throws in the roll-out (the paper's reward); ``throws``: the same as int64;
 - ``time_to_drop`` (float64): seconds until the ball fell below the drop height, NaN if never;
 - ``seed`` (int64): the env reset seed of the roll-out;
@@ -21,57 +21,66 @@ The learner refits the distribution from the batch and hands it back with
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable, Iterator
-from typing import Any
+from collections.abc import Iterator, Sequence
+from typing import Any, Protocol
 
 import torch
 from tensordict import TensorDict, TensorDictBase
 from torchrl.collectors import BaseCollector
 
 from jugglerl.dps.distribution import SearchDistribution
-from jugglerl.dps.params import ViaPointConstraints, params_to_command
-from jugglerl.dps.rollouts import CommandRollouts
+from jugglerl.dps.rollouts import RolloutResults
 
 #: Reset seeds of roll-outs are drawn below this bound (they matter when the env has reset noise).
 SEED_BOUND = 2**31 - 1
 
 
+class Space(Protocol):
+    """What the collector needs of a search space: its constraints and its decoding."""
+
+    def project(self, params: torch.Tensor) -> torch.Tensor: ...
+
+    def decode(self, params: torch.Tensor) -> Any: ...
+
+
+class Rollouts(Protocol):
+    def evaluate(self, candidates: Sequence[Any], seeds: Sequence[int]) -> RolloutResults: ...
+
+    def close(self) -> None: ...
+
+
 class DPSCollector(BaseCollector):
-    """Samples commands from a search distribution and rolls them out, batch after batch.
+    """Samples θ of a search space from a search distribution and rolls them out.
 
     Args:
+        space: the search space (``project`` samples onto its constraints, ``decode`` one θ
+            into what ``rollouts`` evaluates).
         rollouts: evaluates candidates (``evaluate(candidates, seeds)`` gives ``RolloutResults``;
             it owns the env and the workers, closed by ``shutdown``).
         distribution: the starting search distribution.
-        constraints: projection of samples onto valid parameters (``project``).
         frames_per_batch: roll-outs per iteration (the paper's N).
         total_frames: roll-out budget; ``-1`` runs until stopped.
         seed: seeds the sampling RNG.
-        decode: turns one θ into what ``rollouts`` evaluates; default: ``params_to_command``.
-            DPS training decodes with the start command's pan and the lead-in; ``algo=feedback``
-            decodes feedback gains.
     """
 
     def __init__(
         self,
-        rollouts: CommandRollouts,
+        space: Space,
+        rollouts: Rollouts,
         distribution: SearchDistribution,
-        constraints: ViaPointConstraints,
         *,
         frames_per_batch: int,
         total_frames: int = -1,
         seed: int = 0,
-        decode: Callable[[torch.Tensor], Any] | None = None,
     ):
         super().__init__()
         if frames_per_batch < 1:
             raise ValueError("frames_per_batch (roll-outs per batch) must be >= 1")
+        self.space = space
         self.rollouts = rollouts
         self.distribution = distribution
-        self.constraints = constraints
         self.frames_per_batch = self.requested_frames_per_batch = frames_per_batch
         self.total_frames = total_frames
-        self.decode = decode or params_to_command
         self.generator = torch.Generator()
         self.set_seed(seed)
         self.iteration = 0
@@ -86,9 +95,9 @@ class DPSCollector(BaseCollector):
         count = self.frames_per_batch
         if self.total_frames >= 0:
             count = min(count, self.total_frames - self.frames)
-        params = self.distribution.sample(count, self.generator, self.constraints)
+        params = self.distribution.sample(count, self.generator, self.space)
         seeds = torch.randint(SEED_BOUND, (count,), generator=self.generator)
-        candidates = [self.decode(theta) for theta in params]
+        candidates = [self.space.decode(theta) for theta in params]
         results = self.rollouts.evaluate(candidates, seeds.tolist())
         throws = torch.as_tensor(results.throws, dtype=torch.int64)
         batch = TensorDict(

@@ -51,10 +51,8 @@ class SearchDistribution:
     def stds(self) -> torch.Tensor:
         return self.cov.diagonal().sqrt()
 
-    def sample(
-        self, count: int, generator: torch.Generator, constraints: ViaPointConstraints
-    ) -> torch.Tensor:
-        """``[count, n]`` samples, each projected onto a valid command."""
+    def sample(self, count: int, generator: torch.Generator, constraints) -> torch.Tensor:
+        """``[count, n]`` samples, each projected by ``constraints.project``."""
         noise = torch.randn(count, len(self.mean), generator=generator, dtype=torch.float64)
         raw = self.mean + noise @ _cholesky_factor(self.cov).T
         return constraints.project(raw)

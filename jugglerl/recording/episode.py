@@ -1,4 +1,5 @@
-"""``EpisodeRecorder``: records episodes of the juggling env in 3D, with the ball-height plot."""
+"""``EpisodeRecorder``: records episodes of the juggling env in 3D, with the ball-height plot;
+``record_episode``: one recorded episode of a policy."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ import mujoco
 import numpy as np
 import rerun as rr
 
+from jugglerl.evaluation import EpisodeMetrics, run_episode
+from jugglerl.policies import Policy
 from jugglerl.recording.geometry import (
     body_paths,
     log_static_scene,
@@ -193,3 +196,20 @@ class EpisodeRecorder(gym.Wrapper):
                     quaternion=quaternions[:, body].astype(np.float32),
                 ),
             )
+
+
+def record_episode(
+    env: gym.Env,
+    policy: Policy,
+    stream: rr.RecordingStream,
+    root: str = "",
+    seed: int | None = None,
+    scene_fps: float = 50.0,
+) -> EpisodeMetrics:
+    """Run one episode of ``policy`` in ``env`` while recording it under ``root``; the recorder
+    is closed (the episode sent) whatever happens, and ``env`` with it."""
+    recorder = EpisodeRecorder(env, stream, root, scene_fps)
+    try:
+        return run_episode(recorder, policy, seed=seed)
+    finally:
+        recorder.close()

@@ -1,0 +1,143 @@
+"""``feedback_gains`` (``algo=feedback``): the gains of the closed-loop ``FeedbackPolicy``.
+
+θ is ``FeedbackGains`` (bounded by ``algo.bounds``), searched from ``algo.start``; the command it
+locks to is fixed (``algo.command``). Every θ is rolled out closed loop in the Python env, once
+under each of ``algo.conditions`` (env overrides: nominal, kicks, start offsets), in
+``algo.workers`` processes; its return is its throws summed over the conditions, so the search
+prefers gains that juggle in all of them. The best θ is written as ``best_policy.yaml``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import torch
+from omegaconf import DictConfig, OmegaConf
+
+from jugglerl.config import make_juggle_env
+from jugglerl.dps.distribution import SearchDistribution
+from jugglerl.dps.rollouts import RolloutResults
+from jugglerl.dps.spaces import SPACES
+from jugglerl.episode_pool import EpisodePool, EpisodeTask
+from jugglerl.policies.command import load_command
+from jugglerl.policies.feedback import (
+    PARAM_NAMES,
+    FeedbackGains,
+    FeedbackPolicy,
+    save_feedback_policy,
+)
+
+BEST_POLICY = "best_policy.yaml"
+
+
+def gains_from_params(params: torch.Tensor) -> FeedbackGains:
+    """θ (``PARAM_NAMES`` order) as ``FeedbackGains``."""
+    return FeedbackGains(*(float(value) for value in params))
+
+
+class FeedbackRollouts:
+    """Rolls ``FeedbackGains`` out with ``command`` under each of ``conditions``.
+
+    ``evaluate(gains, seeds)`` gives, per θ, the throws summed over the conditions and the
+    earliest drop (NaN when none dropped); episode ``k`` of θ ``i`` uses reset seed
+    ``seeds[i] + k``.
+    """
+
+    def __init__(self, env_cfg: DictConfig, command, conditions: list[dict], workers: int):
+        base = OmegaConf.to_container(env_cfg, resolve=True)
+        self.envs = [{**base, **condition} for condition in conditions]
+        self.templates = [make_juggle_env(OmegaConf.create(env)) for env in self.envs]
+        self.command = command
+        self._pool = EpisodePool(workers)
+
+    def evaluate(self, candidates: list[FeedbackGains], seeds: list[int]) -> RolloutResults:
+        tasks = [
+            EpisodeTask(env, FeedbackPolicy(self.command, gains, template), seed + k)
+            for gains, seed in zip(candidates, seeds, strict=True)
+            for k, (env, template) in enumerate(zip(self.envs, self.templates, strict=True))
+        ]
+        episodes = self._pool.run(tasks)
+        throws = np.array([m.throws for m in episodes]).reshape(len(candidates), len(self.envs))
+        drops = np.array(
+            [np.nan if m.time_to_drop is None else m.time_to_drop for m in episodes]
+        ).reshape(throws.shape)
+        return RolloutResults(throws.sum(axis=1), np.fmin.reduce(drops, axis=1))
+
+    def close(self) -> None:
+        self._pool.close()
+        for env in self.templates:
+            env.close()
+
+    def __enter__(self) -> FeedbackRollouts:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+
+@SPACES.register("feedback_gains")
+class FeedbackGainSpace:
+    """θ of ``FeedbackGains``; see the module docstring."""
+
+    def __init__(self, cfg: DictConfig):
+        self.cfg = cfg
+        algo = cfg.algo
+        self.command = load_command(algo.command)
+        missing = set(PARAM_NAMES) - set(algo.bounds)
+        if missing:
+            raise ValueError(f"algo.bounds: missing {sorted(missing)}")
+        low, high = zip(*(algo.bounds[name] for name in PARAM_NAMES), strict=True)
+        self.low, self.high = (torch.tensor(v, dtype=torch.float64) for v in (low, high))
+        if torch.any(self.low > self.high):
+            raise ValueError("algo.bounds: every [low, high] needs low <= high")
+        self.start = torch.tensor([algo.start[name] for name in PARAM_NAMES], dtype=torch.float64)
+        problems = self.violations(self.start)
+        if problems:
+            raise ValueError(f"algo.start: outside algo.bounds: {'; '.join(problems)}")
+        self.stds = torch.tensor([algo.std[name] for name in PARAM_NAMES], dtype=torch.float64)
+
+    def project(self, params: torch.Tensor) -> torch.Tensor:
+        return torch.clamp(params, self.low, self.high)
+
+    def violations(self, params: torch.Tensor) -> list[str]:
+        return [
+            f"{name}={float(value):g} outside [{float(lo):g}, {float(hi):g}]"
+            for name, value, lo, hi in zip(PARAM_NAMES, params, self.low, self.high, strict=True)
+            if not lo <= value <= hi
+        ]
+
+    def decode(self, params: torch.Tensor) -> FeedbackGains:
+        return gains_from_params(params)
+
+    def search_env(self, reset_noise: float | None = None) -> gym.Env:
+        return make_juggle_env(self.cfg.env, reset_noise=reset_noise)
+
+    def rollouts(self, reset_noise: float | None = None) -> FeedbackRollouts:
+        conditions = [dict(c) for c in self.cfg.algo.conditions]
+        if reset_noise is not None:
+            conditions = [{"reset_noise": reset_noise}]
+        return FeedbackRollouts(self.cfg.env, self.command, conditions, self.cfg.algo.workers)
+
+    def policy(self, params: torch.Tensor, env: gym.Env) -> FeedbackPolicy:
+        return FeedbackPolicy(self.command, self.decode(params), env)
+
+    def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
+        save_feedback_policy(run_dir / BEST_POLICY, self.command, self.decode(params), name)
+        return BEST_POLICY
+
+    def describe(self, params: torch.Tensor, name: str) -> dict:
+        return {"best_gains": asdict(self.decode(params)), "command": self.command.to_dict()}
+
+    def record(self, distribution: SearchDistribution) -> dict[str, float]:
+        means = zip(PARAM_NAMES, distribution.mean, strict=True)
+        return {f"mean_{name}": float(mean) for name, mean in means}
+
+    def headline(self, metrics: dict) -> str:
+        return (
+            f"feedback ({self.cfg.algo['update']}): best gains scored {metrics['best_throws']}"
+            f" throws over {len(self.cfg.algo.conditions)} conditions x"
+            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} samples"
+        )

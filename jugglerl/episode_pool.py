@@ -1,0 +1,81 @@
+"""``EpisodePool``: episodes of closed-loop policies in worker processes, results in order.
+
+A closed-loop episode steps Python every env step, so batches of them (the feedback search's
+roll-outs, the robustness benchmark) run one per process. A task names the env (keyword
+arguments of ``JuggleEnv``), the policy (a ``Policy`` object, pickled to the worker, or a
+``policy=`` spec that each worker loads once and keeps) and the reset seed.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+
+import torch
+
+from jugglerl.evaluation import EpisodeMetrics, run_episode
+from jugglerl.policies import Policy
+from jugglerl_envs import JuggleEnv
+
+
+@dataclass(frozen=True)
+class EpisodeTask:
+    """One episode: ``JuggleEnv(**env)``, ``policy`` (an object or a spec) and the reset seed."""
+
+    env: dict
+    policy: Policy | str
+    seed: int
+
+
+_worker_policies: dict[str, Policy] = {}
+
+
+def _start_worker() -> None:
+    torch.set_num_threads(1)  # one thread per worker: the workers are the parallelism
+
+
+def run_task(task: EpisodeTask) -> EpisodeMetrics:
+    """Run one task here (what a worker does)."""
+    from jugglerl.policies.loading import load_policy
+
+    env = JuggleEnv(**task.env)
+    policy = task.policy
+    if isinstance(policy, str):  # perturbations leave what a policy reads of the env unchanged
+        if policy not in _worker_policies:
+            _worker_policies[policy] = load_policy(policy, env)
+        policy = _worker_policies[policy]
+    metrics = run_episode(env, policy, seed=task.seed)
+    env.close()
+    return metrics
+
+
+class EpisodePool:
+    """``workers`` processes (0: one per core) that run ``EpisodeTask``s."""
+
+    def __init__(self, workers: int = 0):
+        self.workers = workers or os.cpu_count() or 1
+        self._pool = ProcessPoolExecutor(self.workers, initializer=_start_worker)
+
+    def run(
+        self,
+        tasks: Sequence[EpisodeTask],
+        on_episode: Callable[[EpisodeMetrics], None] | None = None,
+    ) -> list[EpisodeMetrics]:
+        """The tasks' metrics in the order of ``tasks``; ``on_episode`` sees each as it ends."""
+        results = []
+        for metrics in self._pool.map(run_task, tasks, chunksize=1):
+            results.append(metrics)
+            if on_episode is not None:
+                on_episode(metrics)
+        return results
+
+    def close(self) -> None:
+        self._pool.shutdown()
+
+    def __enter__(self) -> EpisodePool:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()

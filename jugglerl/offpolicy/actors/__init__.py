@@ -1,0 +1,50 @@
+"""Actors: deterministic networks from the network's ``state`` to an ``action`` in [-1, 1].
+
+Each module registers a class in ``ACTORS`` (chosen by ``actor.name``) with
+
+- ``build(actor_cfg, state_size, action_size) -> TensorDictSequential``: the network, reading
+  ``state`` (and, if it needs it, the episode ``time``) and writing ``action``;
+- ``recurrent_state(actor_cfg) -> dict``: the recurrent state it carries between steps, as
+  ``{key: shape}`` (empty for a feed-forward actor). The env stack adds zero states on reset
+  for these keys (``primer``), updates run the actor in recurrent mode on sub-trajectories, and
+  ``ActorPolicy`` carries them from step to step.
+
+Adding one: a module here and a ``configs/actor/NAME.yaml``.
+"""
+
+from __future__ import annotations
+
+from omegaconf import DictConfig
+from torchrl.data import Unbounded
+from torchrl.envs import TensorDictPrimer
+
+from jugglerl.registry import Registry
+
+ACTORS = Registry("actor", __name__)
+
+
+class FeedForward:
+    """Base for actors without recurrent state."""
+
+    @staticmethod
+    def recurrent_state(actor_cfg: DictConfig) -> dict[str, tuple[int, ...]]:
+        return {}
+
+
+def recurrent_state(actor_cfg: DictConfig) -> dict[str, tuple[int, ...]]:
+    """The recurrent state of the actor ``actor_cfg`` names."""
+    return ACTORS.get(actor_cfg.name).recurrent_state(actor_cfg)
+
+
+def build_actor(actor_cfg: DictConfig, state_size: int, action_size: int):
+    return ACTORS.get(actor_cfg.name).build(actor_cfg, state_size, action_size)
+
+
+def primer(actor_cfg: DictConfig) -> TensorDictPrimer | None:
+    """The env transform that writes the actor's zero recurrent state on reset (None if none)."""
+    states = recurrent_state(actor_cfg)
+    if not states:
+        return None
+    return TensorDictPrimer(
+        {key: Unbounded(shape=shape) for key, shape in states.items()}, expand_specs=True
+    )

@@ -1,0 +1,162 @@
+"""``make_env``: the juggling env batched in one process, under TorchRL's transform stack.
+
+TorchRL costs about half a millisecond per env call whatever the batch (toolchain-notes.md), so
+the envs run as one synchronous Gymnasium vector env behind a single ``GymWrapper``. The stack
+keeps the env's physical ``observation`` (float64) and episode ``time`` (s, float64) as they
+are, for teachers acting in the loop (``jugglerl.offpolicy.teacher``), and builds the networks'
+input ``state`` beside them:
+
+| transform | why |
+| --- | --- |
+| ``RenameTransform`` | copies ``observation`` to ``state``, the networks' input |
+| ``DoubleToFloat`` | ``state`` to float32 (MuJoCo states are float64; the networks are float32) |
+| ``StepCounter`` | ``step_count``: per-episode step index (the slice sampler reads it) |
+| ``InitTracker`` | ``is_init``: marks first steps, which reset LSTM states and OU noise |
+| ``RewardSum`` | ``episode_reward``: the return of the running episode |
+| ``ObservationNorm`` | standardises ``state`` (stats fitted on random steps) |
+| ``TimestampFeatures`` | appends elapsed time and cycle phase to ``state`` (``state.timestamp``) |
+| ``TensorDictPrimer`` | the actor's zero recurrent state on reset (recurrent actors only) |
+
+``state`` is therefore 18 normalised values plus, with the timestamp, 3 time features
+(``state_size``). ``state_transforms`` builds the copy, the cast, the normalisation and the time
+features on their own, so that a trained actor runs outside TorchRL
+(``jugglerl.policies.actor.ActorPolicy``) on exactly the same inputs.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import torch
+from omegaconf import DictConfig, OmegaConf
+from torchrl.data import Unbounded
+from torchrl.envs import (
+    DoubleToFloat,
+    EnvBase,
+    GymWrapper,
+    InitTracker,
+    ObservationNorm,
+    RenameTransform,
+    RewardSum,
+    StepCounter,
+    Transform,
+    TransformedEnv,
+)
+from torchrl.envs.libs.gym import default_info_dict_reader
+
+from jugglerl.offpolicy.actors import primer
+from jugglerl.offpolicy.timestamp import NUM_TIME_FEATURES, TimestampFeatures
+from jugglerl_envs import ENV_ID
+
+#: The info entries training and evaluation read, all numeric (see ``NumericInfo``), and their
+#: dtypes in the tensordict.
+INFO_KEYS = {"throws": torch.int64, "catches": torch.int64, "time": torch.float64}
+OBSERVATION_SIZE = 18
+ACTION_SIZE = 3
+
+
+class NumericInfo(gym.Wrapper):
+    """Passes on only ``INFO_KEYS`` and a boolean ``physics_error``.
+
+    TorchRL's reader for vector envs turns every info entry into a tensor; the env's
+    ``physics_error`` message is a string, which it cannot hold.
+    """
+
+    def reset(self, **kwargs):
+        observation, info = self.env.reset(**kwargs)
+        return observation, self._numeric(info)
+
+    def step(self, action):
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        return observation, reward, terminated, truncated, self._numeric(info)
+
+    @staticmethod
+    def _numeric(info: dict) -> dict:
+        numeric = {key: info[key] for key in INFO_KEYS}
+        numeric["physics_error"] = bool(info["physics_error"])
+        return numeric
+
+
+def make_vector_env(env_cfg: DictConfig, num_envs: int) -> gym.vector.VectorEnv:
+    """``num_envs`` juggling envs from a ``configs/env`` group, stepped in this process.
+
+    Without auto-reset: TorchRL resets finished envs itself (``_reset`` masks), so each
+    transition's next observation is the true last one and no terminal-observation reader runs
+    on every step. Bad env values raise ``ValueError`` naming the key.
+    """
+    if num_envs < 1:
+        raise ValueError(f"collector.num_envs={num_envs} must be >= 1")
+    kwargs = OmegaConf.to_container(env_cfg, resolve=True)
+    try:
+        return gym.make_vec(
+            ENV_ID,
+            num_envs=num_envs,
+            vectorization_mode="sync",
+            vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.DISABLED},
+            wrappers=[NumericInfo],
+            **kwargs,
+        )
+    except TypeError as error:  # an unknown key in the env group
+        raise ValueError(f"env config: {error}") from None
+
+
+def state_size(state_cfg: DictConfig) -> int:
+    """Size of the networks' input ``state``: the observation and, optionally, time features."""
+    return OBSERVATION_SIZE + (NUM_TIME_FEATURES if state_cfg.timestamp else 0)
+
+
+def state_transforms(
+    state_cfg: DictConfig, duration: float, loc: torch.Tensor | None, scale: torch.Tensor | None
+) -> list[Transform]:
+    """``state`` from the observation: copied, cast to float32, normalised and (with
+    ``state_cfg.timestamp``) given the time features.
+
+    ``loc``/``scale`` of ``None`` leave the normalisation to be fitted by ``fit_normalisation``.
+    """
+    transforms: list[Transform] = [
+        RenameTransform(["observation"], ["state"], create_copy=True),
+        DoubleToFloat(in_keys=["state"]),
+        ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True),
+    ]
+    if state_cfg.timestamp:
+        transforms.append(TimestampFeatures(duration=duration, period=state_cfg.period))
+    return transforms
+
+
+def make_env(
+    cfg: DictConfig,
+    num_envs: int,
+    loc: torch.Tensor | None = None,
+    scale: torch.Tensor | None = None,
+) -> EnvBase:
+    """The batched env of ``cfg.env`` under the transform stack (see the module docstring), with
+    the recurrent state of the actor ``cfg.actor`` primed.
+
+    Pass the ``loc``/``scale`` of a trained run to reuse its normalisation; otherwise it is
+    fitted on ``cfg.state.norm_frames`` random steps.
+    """
+    env = TransformedEnv(GymWrapper(make_vector_env(cfg.env, num_envs)))
+    info_specs = {key: Unbounded((num_envs,), dtype=dtype) for key, dtype in INFO_KEYS.items()}
+    info_specs["physics_error"] = Unbounded((num_envs,), dtype=torch.bool)
+    env.base_env.set_info_dict_reader(default_info_dict_reader(list(info_specs), spec=info_specs))
+    copy, cast, *rest = state_transforms(cfg.state, cfg.env.duration, loc, scale)
+    for transform in (copy, cast, StepCounter()):
+        env.append_transform(transform)
+    for transform in (InitTracker(), RewardSum(), *rest):
+        env.append_transform(transform)
+    if loc is None:
+        fit_normalisation(env, cfg.state.norm_frames)
+    recurrent = primer(cfg.actor)
+    if recurrent is not None:
+        env.append_transform(recurrent)
+    return env
+
+
+def normalisation(env: EnvBase) -> ObservationNorm:
+    """The env stack's ``ObservationNorm``."""
+    return next(t for t in env.transform if isinstance(t, ObservationNorm))
+
+
+def fit_normalisation(env: EnvBase, frames: int) -> None:
+    """Fit the observation normalisation on about ``frames`` steps of uniformly random actions."""
+    # init_stats rolls out until it has ``frames`` (batch x time) observations
+    normalisation(env).init_stats(num_iter=frames, reduce_dim=(0, 1), cat_dim=1)

@@ -1,0 +1,48 @@
+"""``TeacherModule``: any ``Policy`` acting inside the TorchRL loop, one copy per env of the batch.
+
+A teacher (the closed-loop ``FeedbackPolicy``, an open-loop command, a trained actor) is a plain
+policy with per-episode state, stepped on numpy observations. The module runs one copy of it
+per env of the batch on the env stack's raw ``observation`` and ``time`` (kept beside the
+networks' ``state``, see ``env_stack``), resets a copy when its env starts an episode
+(``is_init``), and writes the actions under ``("teacher", "action")``: into the replay buffer
+with each transition (the labels of behaviour cloning), and for exploration centred on it.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import torch
+from tensordict import TensorDictBase
+from tensordict.nn import TensorDictModuleBase
+
+from jugglerl.policies import Policy
+
+TEACHER_ACTION = ("teacher", "action")
+
+
+class TeacherModule(TensorDictModuleBase):
+    """``num_envs`` copies of ``policy`` labelling a batch ``[num_envs]`` step by step."""
+
+    in_keys = ["observation", "time", "is_init"]
+    out_keys = [TEACHER_ACTION]
+
+    def __init__(self, policy: Policy, num_envs: int):
+        super().__init__()
+        self.policies = [copy.deepcopy(policy) for _ in range(num_envs)]
+
+    def forward(self, tensordict: TensorDictBase) -> TensorDictBase:
+        observations = tensordict.get("observation").detach().cpu().double().numpy()
+        times = tensordict.get("time").detach().cpu().double().numpy().reshape(-1)
+        starts = tensordict.get("is_init").detach().cpu().numpy().reshape(-1)
+        if len(observations) != len(self.policies):
+            raise ValueError(
+                f"the teacher has {len(self.policies)} copies for a batch of {len(observations)}"
+            )
+        actions = np.empty((len(self.policies), 3), dtype=np.float32)
+        for index, policy in enumerate(self.policies):
+            if starts[index]:
+                policy.reset()
+            actions[index] = policy.act(observations[index], float(times[index]))
+        return tensordict.set(TEACHER_ACTION, torch.from_numpy(actions))

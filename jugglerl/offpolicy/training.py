@@ -1,0 +1,307 @@
+"""The off-policy trainer (``trainer: offpolicy``), read top to bottom: collect -> store ->
+update -> log -> evaluate -> checkpoint, with its loss a plug-in (``algo.loss``: ``ddpg``,
+``td3``, ``bc``; ``jugglerl.offpolicy.losses``).
+
+``OffPolicyTraining`` is built from the Hydra config (``configs/train.yaml``; ``algo=ddpg`` is
+the default) and a run directory, where it writes
+
+- ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
+  the loss's networks, targets and optimisers, the observation normalisation, the exploration
+  state, RNG states, counters, history and config, and the deployed actor's weights
+  (``policy``: what ``scripts/evaluate.py policy=<run dir>`` runs); the replay buffer is not
+  saved (a resumed run refills it);
+- ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
+  periodic evaluations and the per-batch history.
+
+With ``teacher.policy`` set, a teacher acts in the loop beside the actor
+(``jugglerl.offpolicy.teacher``): its actions land in the replay buffer for behaviour cloning and
+for exploration centred on it. Metrics go to the rerun logger under ``train/`` (per collected
+batch) and ``eval/`` (each evaluation) on the ``step`` timeline (env frames).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from omegaconf import DictConfig, OmegaConf
+from tensordict.nn import TensorDictSequential
+from torchrl.collectors import Collector
+from tqdm import tqdm
+
+from jugglerl.checkpoints import CHECKPOINT, save_checkpoint
+from jugglerl.config import make_juggle_env
+from jugglerl.offpolicy.actors import build_actor, recurrent_state
+from jugglerl.offpolicy.buffer import ReplayBuffer
+from jugglerl.offpolicy.env_stack import (
+    ACTION_SIZE,
+    make_env,
+    normalisation,
+    state_size,
+    state_transforms,
+)
+from jugglerl.offpolicy.evaluation import Evaluations
+from jugglerl.offpolicy.exploration import make_exploration
+from jugglerl.offpolicy.losses import LOSSES
+from jugglerl.offpolicy.teacher import TeacherModule
+from jugglerl.policies.actor import ActorPolicy
+from jugglerl.policies.loading import load_policy
+from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.names import EVAL, TRAIN, join
+
+METRICS = "metrics.json"
+
+
+class OffPolicyTraining:
+    """One off-policy run; ``run()`` trains to ``collector.total_frames``. Pass the ``state`` of
+    ``load_checkpoint(path)`` to resume (it also supplies the observation normalisation)."""
+
+    def __init__(self, cfg: DictConfig, run_dir: str | Path, state: dict | None = None):
+        _check(cfg)
+        self.cfg = cfg
+        self.run_dir = Path(run_dir)
+        torch.manual_seed(cfg.seed)
+        norm = state["normalisation"] if state is not None else {"loc": None, "scale": None}
+        self.env = make_env(cfg, cfg.collector.num_envs, norm["loc"], norm["scale"])
+        size = state_size(cfg.state)
+        self.actor = build_actor(cfg.actor, size, ACTION_SIZE)
+        self.recurrent = bool(recurrent_state(cfg.actor))
+        self.update = LOSSES.get(cfg.algo.loss)(
+            self.actor, size, self.env.action_spec, cfg, self.recurrent
+        )
+        self.noise = make_exploration(cfg.exploration, self.env.action_spec)
+        self.policy = TensorDictSequential(*self._teacher(), self.actor, self.noise)
+        self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
+        self.evaluations = Evaluations(cfg)
+        self.frames = 0
+        self.updates = 0
+        self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
+        self.history: list[dict] = []  # one record per collected batch
+        self.recording_id: str | None = None
+        if state is not None:
+            self.load_state_dict(state)
+
+    def _teacher(self) -> list[TeacherModule]:
+        """The teacher acting in the loop, when ``teacher.policy`` names one."""
+        spec = self.cfg.teacher.policy
+        if spec is None:
+            return []
+        template = make_juggle_env(self.cfg.env)
+        teacher = load_policy(str(spec), template)
+        template.close()
+        return [TeacherModule(teacher, self.cfg.collector.num_envs)]
+
+    # --- the loop -------------------------------------------------------------------------
+    def run(self, logger: RerunLogger, progress: bool = True) -> dict:
+        """Train until the frame budget is spent, evaluate in full; returns the final metrics.
+
+        On Ctrl-C the checkpoint is brought up to date before ``KeyboardInterrupt`` propagates.
+        """
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        logger.send_blueprint(juggling_blueprint(metric_groups=[TRAIN, EVAL]))
+        collect = self.cfg.collector
+        bar = tqdm(
+            total=collect.total_frames,
+            initial=self.frames,
+            desc=f"{self.cfg.algo.name.upper()} {self.cfg.actor.name}",
+            unit="frame",
+            disable=not progress,
+        )
+        started = time.monotonic()
+        try:
+            with bar:
+                self._train(logger, bar)
+        except KeyboardInterrupt:
+            self.wall_seconds += time.monotonic() - started
+            self.save()
+            raise
+        self.wall_seconds += time.monotonic() - started
+        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor())
+        if self.evaluations.best is not None:
+            final["policy_frames"] = self.evaluations.best["frames"]
+        self.save()
+        metrics = {
+            "algo": self.cfg.algo.name,
+            "actor": self.cfg.actor.name,
+            "exploration": self.cfg.exploration.name,
+            "reward": self.cfg.env.reward,
+            "seed": self.cfg.seed,
+            "wall_seconds": round(self.wall_seconds, 1),
+            "frames": self.frames,
+            "updates": self.updates,
+            "final_evaluation": final,
+            "evaluations": self.evaluations.records,
+            "history": self.history,
+        }
+        (self.run_dir / METRICS).write_text(json.dumps(metrics, indent=2) + "\n")
+        return metrics
+
+    def _train(self, logger: RerunLogger, bar: tqdm) -> None:
+        collect = self.cfg.collector
+        remaining = collect.total_frames - self.frames
+        if remaining <= 0:
+            return
+        self.env.set_seed(self.cfg.seed + self.frames)  # a resumed run meets new episodes
+        collector = Collector(
+            self.env,
+            self.policy,
+            frames_per_batch=collect.frames_per_batch,
+            total_frames=remaining,
+            init_random_frames=max(0, collect.init_random_frames - self.frames),
+        )
+        try:
+            for batch in collector:
+                self.buffer.extend(batch)
+                self.frames += batch.numel()
+                self.noise.step(batch.numel())
+                record = self._learn() | self._episode_stats(batch)
+                self.history.append(record)
+                logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
+                bar.set_postfix(
+                    {k: f"{record[k]:.3g}" for k in ("return", "throws") if k in record}
+                )
+                bar.update(batch.numel())
+                if _crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
+                    record = self.evaluate(logger, self.cfg.eval.duration)
+                    self.evaluations.keep_if_best(record, self.current_actor())
+                if _crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
+                    self.save()
+        finally:
+            collector.shutdown(close_env=False)
+
+    def _learn(self) -> dict:
+        """``optim.updates_per_batch`` updates once the buffer holds a batch; mean losses."""
+        ready = (
+            self.frames >= self.cfg.collector.init_random_frames
+            and len(self.buffer) >= self.cfg.replay_buffer.batch_size
+        )
+        if not ready:
+            return {}
+        losses = [
+            self.update(self.buffer.sample()) for _ in range(self.cfg.optim.updates_per_batch)
+        ]
+        self.updates += len(losses)
+        keys = dict.fromkeys(key for loss in losses for key in loss)
+        return {key: float(np.mean([loss[key] for loss in losses if key in loss])) for key in keys}
+
+    def _episode_stats(self, batch) -> dict:
+        """Mean reward per step, and the return, throws, catches and length of finished episodes."""
+        stats = {"frames": self.frames, "reward": float(batch["next", "reward"].mean())}
+        done = batch["next", "done"].squeeze(-1)
+        if done.any():
+            finished = batch["next"][done]
+            stats["return"] = float(finished["episode_reward"].mean())
+            stats["throws"] = float(finished["throws"].double().mean())
+            stats["catches"] = float(finished["catches"].double().mean())
+            stats["episode_seconds"] = float(finished["time"].double().mean())
+        return stats
+
+    def position(self) -> str:
+        """How far the run has got, for messages."""
+        return f"frame {self.frames}"
+
+    def summary(self, metrics: dict) -> str:
+        """One line on what the run reached."""
+        final = metrics["final_evaluation"]
+        return (
+            f"{self.cfg.algo.name.upper()} ({self.cfg.actor.name} actor,"
+            f" {self.cfg.exploration.name} exploration, reward {self.cfg.env.reward}) after"
+            f" {metrics['frames']} frames: catch rate {final['catch_rate']:.0%},"
+            f" {final['mean_throws']:.1f} throws, ball up {final['mean_time_to_drop']:.1f} s on"
+            f" average over {len(final['episodes'])} episodes of {final['duration']:g} s"
+        )
+
+    # --- evaluation -----------------------------------------------------------------------
+    def current_actor(self):
+        """The actor as trained so far: the target (Polyak-averaged) actor with
+        ``eval.target_actor``, else the online one. The online actor can swing between
+        updates; its average moves by ``algo.tau`` per update and holds on to what worked."""
+        return self.update.target_actor() if self.cfg.eval.target_actor else self.actor
+
+    def deployed_actor(self):
+        """The actor the final evaluation, the checkpoint's ``policy`` and ``evaluate.py`` run:
+        with ``eval.keep_best``, the one of the best periodic evaluation; else the current one."""
+        return self.evaluations.deployed(self.current_actor())
+
+    def actor_policy(self, actor) -> ActorPolicy:
+        """``actor`` as a deterministic ``Policy`` on plain Gymnasium envs."""
+        norm = normalisation(self.env)
+        transforms = state_transforms(
+            self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
+        )
+        return ActorPolicy(actor, transforms, recurrent_state(self.cfg.actor))
+
+    def evaluate(self, logger: RerunLogger, duration: float, actor=None) -> dict:
+        """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
+        policy = self.actor_policy(actor if actor is not None else self.current_actor())
+        return self.evaluations.evaluate(policy, self.frames, logger, duration)
+
+    # --- checkpoints ----------------------------------------------------------------------
+    def state_dict(self) -> dict:
+        norm = normalisation(self.env)
+        return {
+            "config": OmegaConf.to_container(self.cfg, resolve=True),
+            "deploys": "actor",
+            "actor": self.actor.state_dict(),
+            "policy": self.deployed_actor().state_dict(),
+            "update": self.update.state_dict(),
+            "normalisation": {"loc": norm.loc.clone(), "scale": norm.scale.clone()},
+            "exploration": self.noise.state_dict(),
+            "rng": {"torch": torch.get_rng_state(), "numpy": np.random.get_state()},
+            "counters": {
+                "frames": self.frames,
+                "updates": self.updates,
+                "wall_seconds": self.wall_seconds,
+            },
+            "history": self.history,
+            **self.evaluations.state_dict(),
+            "recording_id": self.recording_id,
+        }
+
+    def load_state_dict(self, state: dict) -> None:
+        self.actor.load_state_dict(state["actor"])
+        self.update.load_state_dict(state["update"])
+        self.noise.load_state_dict(state["exploration"])
+        torch.set_rng_state(state["rng"]["torch"])
+        np.random.set_state(state["rng"]["numpy"])
+        self.frames = state["counters"]["frames"]
+        self.updates = state["counters"]["updates"]
+        self.wall_seconds = state["counters"]["wall_seconds"]
+        self.history = list(state["history"])
+        self.evaluations.load_state_dict(state)
+        self.recording_id = state["recording_id"]
+
+    def save(self) -> None:
+        save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def _crossed(frames: int, batch: int, every: int) -> bool:
+    """True when the last ``batch`` frames passed a multiple of ``every``."""
+    return every > 0 and frames // every > (frames - batch) // every
+
+
+def _check(cfg: DictConfig) -> None:
+    """Clear errors for budget settings that cannot work together."""
+    collect = cfg.collector
+    if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:
+        raise ValueError(
+            f"collector.frames_per_batch={collect.frames_per_batch} must be a multiple of"
+            f" collector.num_envs={collect.num_envs}"
+        )
+    if collect.total_frames < collect.frames_per_batch:
+        raise ValueError(
+            f"collector.total_frames={collect.total_frames} must be at least"
+            f" collector.frames_per_batch={collect.frames_per_batch}"
+        )
+    if cfg.eval.seeds < 1 or cfg.eval.duration < cfg.eval.catch_time:
+        raise ValueError(
+            f"eval.seeds={cfg.eval.seeds} must be >= 1 and eval.duration={cfg.eval.duration}"
+            f" at least eval.catch_time={cfg.eval.catch_time}"
+        )

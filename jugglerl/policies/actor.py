@@ -1,0 +1,86 @@
+"""``ActorPolicy``: a trained actor as a plain ``Policy`` (observation, time) -> action.
+
+It feeds the actor exactly what it saw in training, through the same transforms
+(``state_transforms``: the state copy, its cast, normalisation and time features), and carries
+the actor's recurrent state from step to step, so ``scripts/evaluate.py`` and the periodic
+evaluation run any Gymnasium ``JuggleEnv`` (with recorders or perturbations wrapped around it)
+without TorchRL's env stack.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from omegaconf import DictConfig, OmegaConf
+from tensordict import TensorDict
+from tensordict.nn import TensorDictSequential
+from torchrl.envs import Transform
+from torchrl.envs.utils import ExplorationType, set_exploration_type
+
+from jugglerl.offpolicy.actors import build_actor, recurrent_state
+from jugglerl.offpolicy.env_stack import ACTION_SIZE, state_size, state_transforms
+
+
+class ActorPolicy:
+    """Deterministic actions of ``actor`` on observations passed through ``transforms``;
+    ``recurrent`` is the actor's recurrent state (``{key: shape}``), zero at each episode's
+    start."""
+
+    def __init__(
+        self,
+        actor: TensorDictSequential,
+        transforms: list[Transform],
+        recurrent: dict[str, tuple[int, ...]],
+    ):
+        self.actor = actor
+        self.transforms = transforms
+        self.recurrent = recurrent
+        self._memory: TensorDict | None = None
+
+    @classmethod
+    def from_config(
+        cls, cfg: DictConfig, weights: dict, normalisation: dict[str, torch.Tensor]
+    ) -> ActorPolicy:
+        """The actor ``cfg.actor`` with ``weights``, on the state of ``cfg.state``."""
+        transforms = state_transforms(
+            cfg.state, cfg.env.duration, normalisation["loc"], normalisation["scale"]
+        )
+        actor = build_actor(cfg.actor, state_size(cfg.state), ACTION_SIZE)
+        actor.load_state_dict(weights)
+        return cls(actor, transforms, recurrent_state(cfg.actor))
+
+    @classmethod
+    def from_state(cls, state: dict) -> ActorPolicy:
+        """The deployed actor of a training checkpoint (``state["policy"]``)."""
+        return cls.from_config(
+            OmegaConf.create(state["config"]), state["policy"], state["normalisation"]
+        )
+
+    def reset(self) -> None:
+        self._memory = None
+
+    def act(self, observation: np.ndarray, time: float) -> np.ndarray:
+        first = self._memory is None
+        data = TensorDict(
+            {
+                "observation": torch.as_tensor(observation).unsqueeze(0),
+                "time": torch.tensor([time], dtype=torch.float64),
+                "is_init": torch.tensor([[first]]),
+            },
+            batch_size=[1],
+        )
+        if first:
+            self._memory = TensorDict(
+                {key: torch.zeros(1, *shape) for key, shape in self.recurrent.items()},
+                batch_size=[1],
+            )
+        data.update(self._memory)
+        for transform in self.transforms:
+            data = transform(data)
+        with torch.no_grad(), set_exploration_type(ExplorationType.DETERMINISTIC):
+            data = self.actor(data)
+        # the next step starts from the state this one left
+        self._memory = TensorDict(
+            {key: data.get(("next", key)) for key in self.recurrent}, batch_size=[1]
+        )
+        return data["action"][0].numpy()

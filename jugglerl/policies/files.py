@@ -1,0 +1,65 @@
+"""Policy files: YAML mappings with a ``kind`` (``command``, the default, or ``feedback``), and the
+shipped ones.
+
+Every shipped policy is one file in ``assets/policies/`` (installed as package data of
+``jugglerl_envs.assets``), named by its stem: ``policy=expert`` is ``assets/policies/expert.yaml``.
+"""
+
+from __future__ import annotations
+
+import json
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from jugglerl.commands import CommandError
+
+SHIPPED_PACKAGE = "jugglerl_envs.assets"
+SHIPPED_FOLDER = "policies"
+SUFFIXES = (".yaml", ".yml", ".json")
+
+
+def shipped_folder() -> Path:
+    return Path(str(resources.files(SHIPPED_PACKAGE).joinpath(SHIPPED_FOLDER)))
+
+
+def shipped_names() -> list[str]:
+    """Names of the shipped policies (``expert``, ``dps_best``, ``closed_loop``, ...)."""
+    return sorted(path.stem for path in shipped_folder().glob("*.yaml"))
+
+
+def policy_file(name_or_path: str | Path) -> Path:
+    """The file a shipped name or a path names; ``CommandError`` listing the shipped names if
+    there is none."""
+    path = Path(name_or_path)
+    if path.suffix.lower() not in SUFFIXES:
+        path = shipped_folder() / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise CommandError(
+            f"no policy file at {path}; shipped policies: {', '.join(shipped_names())}"
+        )
+    return path
+
+
+def read_policy_file(name_or_path: str | Path) -> tuple[dict, str]:
+    """The mapping in a policy file (YAML or JSON) and its path as a string, for messages."""
+    path = policy_file(name_or_path)
+    try:
+        text = path.read_text()
+        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as error:
+        raise CommandError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from None
+    if not isinstance(data, dict):
+        raise CommandError(f"{path}: expected a mapping with a 'kind' key")
+    return data, str(path)
+
+
+def write_policy_file(data: dict, path: str | Path) -> Path:
+    """Write a policy mapping as YAML (JSON for a ``.json`` path), keys in the given order."""
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        path.write_text(json.dumps(data, indent=2))
+    else:
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path

@@ -1,0 +1,54 @@
+"""``load_policy``: a ``policy=NAME|FILE|RUN_DIR`` argument as a runnable policy."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium as gym
+
+from jugglerl.commands import CommandError, command_from_dict
+from jugglerl.policies import Policy
+from jugglerl.policies.command import CommandPolicy
+from jugglerl.policies.feedback import feedback_policy_from_dict
+from jugglerl.policies.files import read_policy_file
+
+#: File names that mark a training checkpoint rather than a policy file.
+CHECKPOINT_SUFFIX = ".pt"
+#: Policy file kinds and their readers (``data, source, env -> Policy``).
+FILE_KINDS = {
+    "command": lambda data, source, env: CommandPolicy(command_from_dict(data, source)),
+    "feedback": feedback_policy_from_dict,
+}
+
+
+def load_policy(spec: str, env: gym.Env) -> Policy:
+    """A policy for envs like ``env`` from a shipped name (``expert``, ``closed_loop``, ...), a
+    policy file (``kind: command``, the default, or ``kind: feedback``) or a training run (its
+    directory or ``checkpoint.pt``: the actor it deploys, or the best policy file of a search).
+
+    Raises ``ValueError`` with a one-line reason when ``spec`` is unusable.
+    """
+    path = Path(spec)
+    if path.suffix == CHECKPOINT_SUFFIX or path.is_dir():
+        return _run_policy(path, env)
+    data, source = read_policy_file(spec)
+    kind = data.get("kind", "command")
+    if kind not in FILE_KINDS:
+        raise CommandError(
+            f"{source}: kind={kind!r} is not a policy kind; use one of {', '.join(FILE_KINDS)}"
+        )
+    return FILE_KINDS[kind](data, source, env)
+
+
+def _run_policy(path: Path, env: gym.Env) -> Policy:
+    """What a training checkpoint says it deploys (``checkpoint["deploys"]``)."""
+    from jugglerl.checkpoints import load_checkpoint  # torch loads only for checkpoints
+
+    state = load_checkpoint(path)
+    deploys = state["deploys"]
+    if deploys == "actor":
+        from jugglerl.policies.actor import ActorPolicy
+
+        return ActorPolicy.from_state(state)
+    run_dir = path if path.is_dir() else path.parent
+    return load_policy(str(run_dir / deploys), env)

@@ -1,0 +1,67 @@
+"""A teacher acting in the TorchRL loop: its batched labels are the plain policy's, step by step."""
+
+import numpy as np
+import torch
+from cli import train_config
+from tensordict.nn import TensorDictModule, TensorDictSequential
+from torchrl.envs.utils import ExplorationType, set_exploration_type
+
+from jugglerl.offpolicy.actors import build_actor
+from jugglerl.offpolicy.env_stack import make_env, state_size
+from jugglerl.offpolicy.teacher import TEACHER_ACTION, TeacherModule
+from jugglerl.policies.loading import load_policy
+from jugglerl_envs import JuggleEnv
+
+#: 2 envs whose 2 s episodes end and restart inside a 250-step roll-out.
+SMALL = ["env.duration=2", "state.norm_frames=200", "collector.num_envs=2"]
+
+
+def replayed_labels(policy, observations, times, starts) -> np.ndarray:
+    """What a single plain ``policy`` answers to one env's observation sequence."""
+    labels = []
+    for observation, time, start in zip(observations, times, starts, strict=True):
+        if start:
+            policy.reset()
+        labels.append(policy.act(observation, float(time)))
+    return np.array(labels)
+
+
+def test_the_teacher_labels_what_the_student_visits_as_the_plain_policy_would():
+    cfg = train_config(*SMALL)
+    torch.manual_seed(0)
+    env = make_env(cfg, 2)
+    env.set_seed(0)
+    teacher = load_policy("closed_loop", JuggleEnv())
+    student = build_actor(cfg.actor, state_size(cfg.state), 3)  # untrained: it acts, badly
+    policy = TensorDictSequential(TeacherModule(teacher, 2), student)
+    with set_exploration_type(ExplorationType.DETERMINISTIC), torch.no_grad():
+        data = env.rollout(250, policy, break_when_any_done=False)
+    starts = data["is_init"].squeeze(-1)
+    assert starts[:, 1:].any()  # episodes restarted inside the roll-out
+    assert not torch.allclose(data["action"], data[TEACHER_ACTION])  # the student drove
+    for index in range(2):
+        expected = replayed_labels(
+            load_policy("closed_loop", JuggleEnv()),
+            data["observation"][index].numpy(),
+            data["time"][index].numpy(),
+            starts[index].numpy(),
+        )
+        np.testing.assert_array_equal(data[TEACHER_ACTION][index].numpy(), expected)
+
+
+def test_a_teacher_driving_the_batch_juggles_as_it_does_alone():
+    cfg = train_config("env.duration=10", "state.norm_frames=200", "collector.num_envs=2")
+    env = make_env(cfg, 2)
+    teacher = TeacherModule(load_policy("closed_loop", JuggleEnv()), 2)
+    follow = TensorDictModule(lambda action: action, [TEACHER_ACTION], ["action"])
+    with torch.no_grad():
+        data = env.rollout(500, TensorDictSequential(teacher, follow))
+    plain = JuggleEnv(duration=10)
+    observation, info = plain.reset(seed=0)
+    alone = load_policy("closed_loop", plain)
+    alone.reset()
+    for step in range(500):
+        action = alone.act(observation, info["time"])
+        np.testing.assert_array_equal(data["action"][0, step].numpy(), action)
+        observation, *_, info = plain.step(action)
+    assert int(data["next", "throws"][0, -1]) == info["throws"] >= 3
