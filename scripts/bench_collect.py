@@ -1,10 +1,10 @@
-"""Speed of the DDPG stack against bare PyTorch/MuJoCo loops doing the same work, in one run.
+"""Speed of the off-policy stack against bare PyTorch/MuJoCo loops doing the same work, in one run.
 
     python scripts/bench_collect.py [--frames 20000] [--updates 300] [--repeats 3] [actor=mlp ...]
 
-1. One DDPG update (``DDPGUpdate``: TorchRL's ``DDPGLoss`` + ``SoftUpdate``) against a bare PyTorch
-   update of the same networks on the same batch (TD(0) target from target networks, L2 critic
-   loss, actor loss -Q(s, μ(s)), both Adams, the same gradient clipping, soft target update).
+1. One DDPG update (the ``ddpg`` loss: TorchRL's ``DDPGLoss`` + ``SoftUpdate``) against a bare
+   PyTorch update of the same networks on the same batch (TD(0) target from target networks, L2
+   critic loss, actor loss -Q(s, μ(s)), both Adams, the same gradient clipping, soft target update).
    Target: ours within 1.2x of bare.
 2. Collection: env steps/s of the TorchRL ``Collector`` (batched env, the transform stack, actor,
    exploration) against a bare loop that steps the same ``JuggleEnv``s (same frame_skip, same
@@ -30,8 +30,8 @@ from torchrl.collectors import Collector
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
 from jugglerl.config import make_juggle_env
-from jugglerl.ddpg.training import DDPGTraining
-from jugglerl.ddpg.update import DDPGUpdate
+from jugglerl.offpolicy.losses.ddpg import DDPG
+from jugglerl.offpolicy.training import OffPolicyTraining
 
 
 def median_time(run, repeats: int) -> float:
@@ -81,12 +81,14 @@ class BareDDPG:
                 )
 
 
-def bare_actor(training: DDPGTraining) -> torch.nn.Module:
+def bare_actor(training: OffPolicyTraining) -> torch.nn.Module:
     """The MLP actor's network (MLP then tanh) as a plain module."""
     return copy.deepcopy(training.actor.module[0].module)
 
 
-def bench_updates(training: DDPGTraining, cfg, updates: int, repeats: int) -> tuple[float, float]:
+def bench_updates(
+    training: OffPolicyTraining, cfg, updates: int, repeats: int
+) -> tuple[float, float]:
     """Seconds per update (medians): ours, bare. Both on the same fixed batch."""
     with torch.no_grad():
         data = Collector(training.env, training.policy, frames_per_batch=2048, total_frames=2048)
@@ -94,16 +96,14 @@ def bench_updates(training: DDPGTraining, cfg, updates: int, repeats: int) -> tu
             training.buffer.extend(batch)
         data.shutdown(close_env=False)
     batch = training.buffer.sample()
-    ours = DDPGUpdate(
-        training.actor, copy.deepcopy(training.update.loss.value_network), cfg.algo, cfg.optim
-    )
     critic = copy.deepcopy(training.update.loss.value_network.module)
+    ours = DDPG(training.actor, batch["state"].shape[-1], training.env.action_spec, cfg)
     bare = BareDDPG(bare_actor(training), critic, cfg)
     tensors = (
-        batch["observation"],
+        batch["state"],
         batch["action"],
         batch["next", "reward"],
-        batch["next", "observation"],
+        batch["next", "state"],
         batch["next", "terminated"].float(),
     )
     ours_times, bare_times = [], []
@@ -114,7 +114,7 @@ def bench_updates(training: DDPGTraining, cfg, updates: int, repeats: int) -> tu
 
 
 # --- collection ---------------------------------------------------------------------------------
-def bench_collector(training: DDPGTraining, frames: int, repeats: int) -> float:
+def bench_collector(training: OffPolicyTraining, frames: int, repeats: int) -> float:
     """Env steps/s of TorchRL's Collector over the training env stack and exploration policy."""
     batch = training.cfg.collector.frames_per_batch
 
@@ -130,7 +130,7 @@ def bench_collector(training: DDPGTraining, frames: int, repeats: int) -> float:
         return frames / median_time(collect, repeats)
 
 
-def bench_bare_loop(training: DDPGTraining, cfg, frames: int, repeats: int) -> float:
+def bench_bare_loop(training: OffPolicyTraining, cfg, frames: int, repeats: int) -> float:
     """Env steps/s of plain JuggleEnvs stepped in a Python loop by the same actor network, with
     the same expert-centred Gaussian exploration (so the ball spends as long in the cup, where
     physics costs most, as in the collector)."""
@@ -146,7 +146,8 @@ def bench_bare_loop(training: DDPGTraining, cfg, frames: int, repeats: int) -> f
             inputs = torch.as_tensor(observations, dtype=torch.float32)
             inputs = torch.cat([inputs, torch.zeros(len(envs), 3)], -1)  # the time features
             actions = actor(inputs)
-            actions = actions + noise.expert_weight * (noise.centre(times).float() - actions)
+            centre = noise.centre.reference(times).float()
+            actions = actions + noise.expert_weight * (centre - actions)
             actions = (actions + noise.sigma * torch.randn_like(actions)).clamp(-1, 1).numpy()
             for i, env in enumerate(envs):
                 observations[i], _, terminated, truncated, info = env.step(actions[i])
@@ -169,12 +170,12 @@ def main() -> None:
         cfg = compose("train", overrides=["actor=mlp", "exploration=gaussian", *overrides])
     torch.set_num_threads(1)  # the collector and the bare loop each run on one core
     with tempfile.TemporaryDirectory() as run_dir:  # the run writes nothing; it lends its parts
-        training = DDPGTraining(cfg, run_dir)  # env stack, actor, exploration, update
+        training = OffPolicyTraining(cfg, run_dir)  # env stack, actor, exploration, update
         measure(training, cfg, args)
         training.close()
 
 
-def measure(training: DDPGTraining, cfg, args: argparse.Namespace) -> None:
+def measure(training: OffPolicyTraining, cfg, args: argparse.Namespace) -> None:
     """Print the update timings, the collection rates and, last, the collection ratio."""
     ours_update, bare_update = bench_updates(training, cfg, args.updates, args.repeats)
     print(

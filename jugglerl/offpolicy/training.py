@@ -6,17 +6,15 @@ update -> log -> evaluate -> checkpoint, with its loss a plug-in (``algo.loss``:
 the default) and a run directory, where it writes
 
 - ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
-  the loss's networks, targets and optimisers, the observation normalisation, the exploration
-  state, RNG states, counters, history and config, and the deployed actor's weights
-  (``policy``: what ``scripts/evaluate.py policy=<run dir>`` runs); the replay buffer is not
-  saved (a resumed run refills it);
+  the loss's networks, targets and optimisers, the normalisation, the exploration state, RNG
+  states, counters, history, config and the deployed actor (``policy``: what
+  ``scripts/evaluate.py policy=<run dir>`` runs); not the replay buffer (a resume refills it);
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
 
-With ``teacher.policy`` set, a teacher acts in the loop beside the actor
-(``jugglerl.offpolicy.teacher``): its actions land in the replay buffer for behaviour cloning and
-for exploration centred on it. Metrics go to the rerun logger under ``train/`` (per collected
-batch) and ``eval/`` (each evaluation) on the ``step`` timeline (env frames).
+With ``teacher.policy`` set, a teacher acts in the loop beside the actor (``teacher``): its actions
+land in the replay buffer for behaviour cloning and centre exploration on it. Metrics go to rerun
+under ``train/`` (per batch) and ``eval/`` (each evaluation) on the ``step`` timeline (frames).
 """
 
 from __future__ import annotations
@@ -87,20 +85,15 @@ class OffPolicyTraining:
 
     def _teacher(self) -> list[TeacherModule]:
         """The teacher acting in the loop, when ``teacher.policy`` names one."""
-        spec = self.cfg.teacher.policy
-        if spec is None:
+        if self.cfg.teacher.policy is None:
             return []
-        template = make_juggle_env(self.cfg.env)
-        teacher = load_policy(str(spec), template)
-        template.close()
+        teacher = load_policy(str(self.cfg.teacher.policy), make_juggle_env(self.cfg.env))
         return [TeacherModule(teacher, self.cfg.collector.num_envs)]
 
     # --- the loop -------------------------------------------------------------------------
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:
-        """Train until the frame budget is spent, evaluate in full; returns the final metrics.
-
-        On Ctrl-C the checkpoint is brought up to date before ``KeyboardInterrupt`` propagates.
-        """
+        """Train to the frame budget, evaluate in full, return the final metrics. On Ctrl-C the
+        checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
         self.run_dir.mkdir(parents=True, exist_ok=True)
         logger.send_blueprint(juggling_blueprint(metric_groups=[TRAIN, EVAL]))
         collect = self.cfg.collector
@@ -201,7 +194,6 @@ class OffPolicyTraining:
         return stats
 
     def position(self) -> str:
-        """How far the run has got, for messages."""
         return f"frame {self.frames}"
 
     def summary(self, metrics: dict) -> str:
