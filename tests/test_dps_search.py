@@ -14,6 +14,7 @@ from jugglerl.dps.params import (
     params_to_command,
 )
 from jugglerl.dps.updates import UPDATES, make_update
+from jugglerl.dps.updates.cma_es import CMAES
 from jugglerl.dps.updates.elite import Elite
 from jugglerl.dps.updates.ereps import EpisodicREPS, ereps_weights
 from jugglerl.dps.updates.greedy import Greedy
@@ -110,12 +111,24 @@ def toy_returns(params: torch.Tensor) -> torch.Tensor:
     return 100 * torch.exp(-((params - OPTIMUM) ** 2).sum(-1) / 8)
 
 
-def optimise(rule, iterations: int = 30, samples: int = 25, seed: int = 0) -> SearchDistribution:
-    distribution = SearchDistribution.diagonal(torch.zeros(3), torch.full((3,), 0.5))
-    generator = torch.Generator().manual_seed(seed)
+class Unconstrained:
+    @staticmethod
+    def project(params):
+        return params
+
+
+def optimise(
+    rule,
+    iterations: int = 30,
+    samples: int = 25,
+    generator: torch.Generator | None = None,
+    distribution: SearchDistribution | None = None,
+) -> SearchDistribution:
+    if distribution is None:
+        distribution = SearchDistribution.diagonal(torch.zeros(3), torch.full((3,), 0.5))
+    generator = generator or torch.Generator().manual_seed(0)
     for _ in range(iterations):
-        noise = torch.randn(samples, 3, generator=generator, dtype=torch.float64)
-        params = distribution.mean + noise * distribution.stds
+        params = distribution.sample(samples, generator, Unconstrained)
         distribution = rule(distribution, params, toy_returns(params))
     return distribution
 
@@ -127,14 +140,42 @@ def optimise(rule, iterations: int = 30, samples: int = 25, seed: int = 0) -> Se
         (lambda: RewardWeighted(), 1.0),  # weights ∝ R move slowly on a wide bump
         (lambda: Elite(5, torch.full((3,), 0.05)), 0.1),
         (lambda: EpisodicREPS(2.0, torch.full((3,), 0.05)), 0.1),
+        (lambda: CMAES(25), 0.1),
     ],
-    ids=["greedy", "weighted", "elite", "ereps"],
+    ids=["greedy", "weighted", "elite", "ereps", "cmaes"],
 )
 def test_each_update_moves_toward_the_optimum(rule, tolerance):
     start = float(torch.linalg.norm(OPTIMUM))
     final = optimise(rule())
     distance = float(torch.linalg.norm(final.mean - OPTIMUM))
     assert distance < tolerance < start
+
+
+def test_cmaes_resumed_from_its_state_continues_to_the_same_samples(tmp_path):
+    straight_generator = torch.Generator().manual_seed(3)
+    straight = optimise(CMAES(25), iterations=10, generator=straight_generator)
+    split_generator = torch.Generator().manual_seed(3)
+    first = CMAES(25)
+    half = optimise(first, iterations=5, generator=split_generator)
+    torch.save({"update": first.state_dict(), "rng": split_generator.get_state()}, tmp_path / "c")
+    saved = torch.load(tmp_path / "c", weights_only=False)
+    resumed = CMAES(25)
+    resumed.load_state_dict(saved["update"])
+    generator = torch.Generator()
+    generator.set_state(saved["rng"])
+    again = optimise(resumed, iterations=5, generator=generator, distribution=half)
+    assert torch.equal(again.mean, straight.mean) and torch.equal(again.cov, straight.cov)
+
+
+def test_cmaes_grows_its_step_on_a_slope():
+    """On a long slope the step size grows, so the search travels further than its first std."""
+    rule = CMAES(10)
+    distribution = SearchDistribution.diagonal(torch.zeros(2), torch.full((2,), 0.1))
+    generator = torch.Generator().manual_seed(0)
+    for _ in range(20):
+        params = distribution.sample(10, generator, Unconstrained)
+        distribution = rule(distribution, params, params[:, 0])  # more is better along x
+    assert float(distribution.stds[0]) > 0.3 and float(distribution.mean[0]) > 3
 
 
 def test_weighted_mean_is_the_reward_weighted_average():
@@ -197,7 +238,7 @@ def test_make_update_names_the_valid_choices():
     )
     rule = make_update(algo, torch.ones(4))
     assert isinstance(rule, EpisodicREPS) and torch.equal(rule.min_stds, torch.full((4,), 0.5))
-    assert UPDATES.names() == ("elite", "ereps", "greedy", "weighted")
+    assert UPDATES.names() == ("cmaes", "elite", "ereps", "greedy", "weighted")
     algo.update = "adam"
     with pytest.raises(ValueError, match="algo.update='adam' is not available; choose one of"):
         make_update(algo, torch.ones(4))

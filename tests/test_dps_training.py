@@ -115,7 +115,7 @@ def run_training(cfg, run_dir: Path, state: dict | None = None) -> tuple[dict, S
     return metrics, training
 
 
-@pytest.mark.parametrize("update", ["greedy", "ereps"])
+@pytest.mark.parametrize("update", ["greedy", "ereps", "cmaes"])
 def test_a_resumed_run_reproduces_the_uninterrupted_one(tmp_path, update):
     straight, _ = run_training(
         train_config(*SHORT, f"algo.update={update}", "algo.episodes=3", "seed=4"),
