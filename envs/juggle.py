@@ -24,16 +24,10 @@ the forearm level. The wrist joints are held at ``wrist_angles`` by their own se
 Cup position and velocity come from the kinematics of the last physics step (MuJoCo computes them
 before integrating), 2 ms older than the joint and ball states at the default timestep.
 
-## Reward (kwarg ``reward``; one module each in ``jugglerl_envs.rewards``)
-- ``throws``: 1 for each throw (the ball crossing ``threshold`` going up in free flight, see
-  ``jugglerl_envs.events``); the paper's reward 1 and the DPS objective.
-- ``distance``: inverse cup–ball distance, bounded: ``min(1, 0.05 m / distance)``
-  (paper's reward 2).
-- ``contacts``: number of ball–arm contacts (arm links and cup plates) after the step (reward 3).
-- ``juggle`` (ours, for closed-loop juggling): the throws plus a small dense centring term,
-  ``0.01 · max(0, 1 - d / 0.1 m)`` with ``d`` the ball's horizontal distance from the cup. It
-  pays for keeping the cup under the ball, in the cup and in flight, without paying for holding
-  the ball (as ``distance`` does), and a drop ends the stream of it.
+## Reward (kwarg ``reward``; one module each in ``jugglerl_envs.rewards``, documented there)
+``throws`` (1 per throw over ``threshold`` in free flight, ``jugglerl_envs.events``: the paper's
+reward 1, the DPS objective), ``distance`` (``min(1, 0.05 m / cup-ball distance)``, reward 2),
+``contacts`` (ball-arm contacts, reward 3), ``juggle`` (ours: throws plus a small centring term).
 
 ## Start state
 Arm at ``home`` (pan, lift, elbow) with the wrist at ``wrist_angles``, at rest; the ball at rest
@@ -53,7 +47,11 @@ fine).
 ## Perturbations (for robustness tests; off by default, see ``jugglerl_envs.perturbations``)
 ``reset_noise`` (ball start offset), ``ball_mass``, ``ball_radius``, ``servo_gain`` (scales the
 arm servos' kp), ``kick_rate`` and ``kick_speed`` (random horizontal velocity kicks of the
-ball in free flight, per second and in m/s).
+ball in free flight, per second and in m/s); imprecision: ``action_noise`` (std of Gaussian
+noise on every action, normalised units) with ``action_noise_correlation`` (s; 0 = white),
+``ball_noise`` (m, std of the observed ball position's noise; the observed ball velocity is then
+the difference of noisy positions over a step) and ``ball_latency`` (env steps the ball's
+observation arrives late). Throws and catches always count the true ball.
 """
 
 from __future__ import annotations
@@ -68,7 +66,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from jugglerl_envs import actions, scene
 from jugglerl_envs.events import JuggleEvents
 from jugglerl_envs.measurements import SceneMeasurements
-from jugglerl_envs.perturbations import BallKicks, scale_servo_gains
+from jugglerl_envs.perturbations import ActionNoise, BallKicks, BallTracker, scale_servo_gains
 from jugglerl_envs.rewards import REWARDS
 from jugglerl_envs.validation import check_choice, check_number, check_vector
 
@@ -98,6 +96,10 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         servo_gain: float = 1.0,
         kick_rate: float = 0.0,
         kick_speed: float = 0.0,
+        action_noise: float = 0.0,
+        action_noise_correlation: float = 0.0,
+        ball_noise: float = 0.0,
+        ball_latency: int = 0,
         drop_height: float = 0.5,
         home: tuple[float, float, float] = PAPER_HOME,
         wrist_angles: tuple[float, float, float] = PAPER_WRIST,
@@ -125,6 +127,12 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self.kick_rate = check_number("kick_rate", kick_rate, 0.0, 100.0)
         self.kick_speed = check_number("kick_speed", kick_speed, 0.0, 10.0)
         self._kicks = BallKicks(self.kick_rate, self.kick_speed)
+        self.action_noise = check_number("action_noise", action_noise, 0.0, 1.0)
+        self.action_noise_correlation = check_number(
+            "action_noise_correlation", action_noise_correlation, 0.0, 100.0
+        )
+        self.ball_noise = check_number("ball_noise", ball_noise, 0.0, 0.1)
+        self.ball_latency = check_number("ball_latency", ball_latency, 0, 50, integer=True)
         self.drop_height = check_number("drop_height", drop_height, 0.0, 2.0)
         self.home = np.array(check_vector("home", home, 3, -2 * math.pi, 2 * math.pi))
         self.wrist_angles = np.array(
@@ -145,6 +153,8 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             camera_name=camera_name,
         )
         self._cache_ids()
+        self._action_noise = ActionNoise(self.action_noise, self.action_noise_correlation, self.dt)
+        self._tracker = BallTracker(self.ball_noise, self.ball_latency, self.dt)
         self._events = JuggleEvents(self.threshold)
         self._steps = 0
         self._max_steps = max(1, round(self.duration / self.dt))
@@ -193,13 +203,17 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._measure_ball_in_cup()
         self._events.reset(self._ball_height(), self._clear_of_cup)
         self._physics_error = ""
-        return self._get_obs()
+        self._action_noise.reset(self.np_random)
+        return self._get_obs(reset=True)
 
     def _get_reset_info(self) -> dict:
         return self._info()
 
     def step(self, action):
-        target = self.action_to_ctrl(np.asarray(action, dtype=np.float64))
+        action = np.asarray(action, dtype=np.float64)
+        if self._action_noise.active:
+            action = action + self._action_noise.draw(self.np_random)
+        target = self.action_to_ctrl(action)
         self._simulate(target)
         self._steps += 1
         self._kick_ball()
@@ -248,7 +262,15 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             self.data.qvel[self._ball_qvel : self._ball_qvel + 3] += kick
             self._kick_count += 1
 
-    def _get_obs(self) -> np.ndarray:
+    def _get_obs(self, reset: bool = False) -> np.ndarray:
+        observation = self._true_obs()
+        if self._tracker.active:  # the policy sees a tracked ball; the events use the true one
+            position, velocity = observation[6:9], observation[9:12]
+            track = self._tracker.reset if reset else self._tracker.observe
+            observation[6:12] = track(position, velocity, self.np_random)
+        return observation
+
+    def _true_obs(self) -> np.ndarray:
         d = self.data
         return np.concatenate(
             [

@@ -88,3 +88,59 @@ def test_the_juggle_reward_pays_for_a_ball_centred_over_the_cup():
         expected = CENTRING_WEIGHT * max(0.0, 1.0 - offset / 0.1)
         assert reward == pytest.approx(expected, abs=2e-4)  # the cup moved a little in the step
         assert 0 < reward <= CENTRING_WEIGHT
+
+
+# --- imprecision ----------------------------------------------------------------------------------
+def applied_noise(**kwargs) -> np.ndarray:
+    """The noise the env added to a held action, read back from the servo setpoints (rad ->
+    normalised), over 500 steps."""
+    env = JuggleEnv(**kwargs)
+    env.reset(seed=3)
+    hold = env.ctrl_to_action(env.home).astype(np.float64)
+    applied = []
+    for _ in range(500):
+        env.step(hold)
+        applied.append(env.ctrl_to_action(env.data.ctrl[:3]) - hold)
+    return np.array(applied)
+
+
+def test_action_noise_is_white_or_correlated_with_the_std_asked_for():
+    white = applied_noise(action_noise=0.01)
+    correlated = applied_noise(action_noise=0.01, action_noise_correlation=0.2)
+    for noise in (white, correlated):
+        assert noise.std() == pytest.approx(0.01, rel=0.25)
+    lag = [np.corrcoef(n[:-1, 1], n[1:, 1])[0, 1] for n in (white, correlated)]
+    assert abs(lag[0]) < 0.15 and lag[1] > 0.8  # exp(-0.02 / 0.2) = 0.90
+    np.testing.assert_array_equal(applied_noise(), 0)  # off: the action as given
+
+
+def tracked_ball(steps: int = 60, **kwargs) -> tuple[np.ndarray, np.ndarray]:
+    """(observed, true) ball position and velocity, ``[steps + 1, 6]``, while the ball falls."""
+    env = JuggleEnv(**kwargs)
+    observation, _ = env.reset(seed=0)
+    hold = env.ctrl_to_action(env.home)
+    seen, true = [observation[6:12]], [env._true_obs()[6:12]]
+    for _ in range(steps):
+        observation, *_ = env.step(hold)
+        seen.append(observation[6:12])
+        true.append(env._true_obs()[6:12])
+    return np.array(seen), np.array(true)
+
+
+def test_a_tracked_ball_has_noisy_positions_and_velocities_from_their_differences():
+    seen, true = tracked_ball(ball_noise=0.002)
+    error = seen[:, :3] - true[:, :3]
+    assert error.std() == pytest.approx(0.002, rel=0.3)
+    np.testing.assert_allclose(seen[1:, 3:], np.diff(seen[:, :3], axis=0) / 0.02)
+    plain_seen, plain_true = tracked_ball()
+    np.testing.assert_array_equal(plain_seen, plain_true)  # off: the true state
+
+
+def test_ball_latency_shows_the_ball_steps_late_and_the_events_read_the_true_one():
+    seen, true = tracked_ball(ball_latency=2)
+    np.testing.assert_array_equal(seen[2:], true[:-2])
+    env = JuggleEnv(ball_latency=2)
+    env.reset(seed=0)
+    for _ in range(10):
+        observation, *_, info = env.step(env.ctrl_to_action(env.home))
+    assert info["ball_height"] == env._true_obs()[8] != observation[8]
