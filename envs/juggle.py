@@ -40,9 +40,9 @@ warning: ``info["physics_error"]`` says which; the env never raises). Truncated 
 
 ## Info
 ``throws``, ``catches``, ``max_consecutive_catches`` (episode totals), ``ball_height`` (m),
-``in_cup`` (bool), ``peak_joint_speed`` (episode maximum of each actuated joint's speed, rad/s,
-sampled every env step), ``time`` (s), ``kicks`` (ball kicks so far), ``physics_error`` ("" when
-fine).
+``in_cup`` (bool), episode maxima sampled every env step: ``max_cup_height`` (the cup's throat, m;
+a counted throw rose at least ``threshold`` minus this above the cup) and ``peak_joint_speed``
+(each actuated joint, rad/s); ``time`` (s), ``kicks`` (so far), ``physics_error`` ("" if fine).
 
 ## Perturbations (for robustness tests; off by default, see ``jugglerl_envs.perturbations``)
 ``reset_noise`` (ball start offset), ``ball_mass``, ``ball_radius``, ``servo_gain`` (scales the
@@ -200,6 +200,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._kick_count = 0
         self._setpoint = self.data.ctrl[:3].copy()
         self._peak_joint_speed = np.zeros(3)
+        self._max_cup_height = float(self.cup_position()[2])
         self._measure_ball_in_cup()
         self._events.reset(self._ball_height(), self._clear_of_cup)
         self._physics_error = ""
@@ -227,6 +228,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         )
         speeds = np.abs(self.data.qvel[self._arm_qvel])
         self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
+        self._max_cup_height = max(self._max_cup_height, float(self.cup_position()[2]))
 
         obs = self._get_obs()
         reward = self._reward(self, throws)
@@ -291,6 +293,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             "ball_height": self._ball_height(),
             "in_cup": bool(self._in_cup),
             "peak_joint_speed": self._peak_joint_speed.copy(),
+            "max_cup_height": self._max_cup_height,
             "time": float(self.data.time),
             "kicks": self._kick_count,
             "physics_error": self._physics_error,

@@ -21,6 +21,8 @@ class EpisodeMetrics:
     duration: float  # simulated seconds the episode lasted
     seed: int | None
     physics_error: str = ""
+    max_cup_height: float = 0.0  # m, the cup's throat at its highest
+    peak_joint_speed: tuple[float, ...] = ()  # rad/s, per actuated joint
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -55,6 +57,8 @@ def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episod
         duration=round(info["time"], 6),
         seed=seed,
         physics_error=info["physics_error"],
+        max_cup_height=round(info["max_cup_height"], 6),
+        peak_joint_speed=tuple(round(float(v), 6) for v in info["peak_joint_speed"]),
     )
 
 

@@ -39,24 +39,23 @@ def gains_from_params(params: torch.Tensor) -> FeedbackGains:
 
 
 class FeedbackRollouts:
-    """Rolls ``FeedbackGains`` out with ``command`` under each of ``conditions``.
+    """Rolls closed-loop candidates, ``(command, gains)`` pairs, out under each of ``conditions``.
 
-    ``evaluate(gains, seeds)`` gives, per θ, the throws summed over the conditions and the
-    earliest drop (NaN when none dropped); episode ``k`` of θ ``i`` uses reset seed
-    ``seeds[i] + k``.
+    ``evaluate(candidates, seeds)`` gives, per candidate, the throws summed over the conditions
+    and the earliest drop (NaN when none dropped); episode ``k`` of candidate ``i`` uses reset
+    seed ``seeds[i] + k``.
     """
 
-    def __init__(self, env_cfg: DictConfig, command, conditions: list[dict], workers: int):
+    def __init__(self, env_cfg: DictConfig, conditions: list[dict], workers: int):
         base = OmegaConf.to_container(env_cfg, resolve=True)
         self.envs = [{**base, **condition} for condition in conditions]
         self.templates = [make_juggle_env(OmegaConf.create(env)) for env in self.envs]
-        self.command = command
         self._pool = EpisodePool(workers)
 
-    def evaluate(self, candidates: list[FeedbackGains], seeds: list[int]) -> RolloutResults:
+    def evaluate(self, candidates: list[tuple], seeds: list[int]) -> RolloutResults:
         tasks = [
-            EpisodeTask(env, FeedbackPolicy(self.command, gains, template), seed + k)
-            for gains, seed in zip(candidates, seeds, strict=True)
+            EpisodeTask(env, FeedbackPolicy(command, gains, template), seed + k)
+            for (command, gains), seed in zip(candidates, seeds, strict=True)
             for k, (env, template) in enumerate(zip(self.envs, self.templates, strict=True))
         ]
         episodes = self._pool.run(tasks)
@@ -78,26 +77,17 @@ class FeedbackRollouts:
         self.close()
 
 
-@SPACES.register("feedback_gains")
-class FeedbackGainSpace:
-    """θ of ``FeedbackGains``; see the module docstring."""
+class GainBox:
+    """Box constraints on the gains (``algo.bounds``: ``[low, high]`` per gain)."""
 
-    def __init__(self, cfg: DictConfig):
-        self.cfg = cfg
-        algo = cfg.algo
-        self.command = load_command(algo.command)
-        missing = set(PARAM_NAMES) - set(algo.bounds)
+    def __init__(self, bounds: DictConfig):
+        missing = set(PARAM_NAMES) - set(bounds)
         if missing:
             raise ValueError(f"algo.bounds: missing {sorted(missing)}")
-        low, high = zip(*(algo.bounds[name] for name in PARAM_NAMES), strict=True)
+        low, high = zip(*(bounds[name] for name in PARAM_NAMES), strict=True)
         self.low, self.high = (torch.tensor(v, dtype=torch.float64) for v in (low, high))
         if torch.any(self.low > self.high):
             raise ValueError("algo.bounds: every [low, high] needs low <= high")
-        self.start = torch.tensor([algo.start[name] for name in PARAM_NAMES], dtype=torch.float64)
-        problems = self.violations(self.start)
-        if problems:
-            raise ValueError(f"algo.start: outside algo.bounds: {'; '.join(problems)}")
-        self.stds = torch.tensor([algo.std[name] for name in PARAM_NAMES], dtype=torch.float64)
 
     def project(self, params: torch.Tensor) -> torch.Tensor:
         return torch.clamp(params, self.low, self.high)
@@ -109,8 +99,16 @@ class FeedbackGainSpace:
             if not lo <= value <= hi
         ]
 
-    def decode(self, params: torch.Tensor) -> FeedbackGains:
-        return gains_from_params(params)
+
+class ClosedLoopSpace:
+    """What the closed-loop spaces share: roll-outs under ``algo.conditions``, a decoded θ as a
+    ``(command, gains)`` pair, and the best one saved as a feedback policy file."""
+
+    def __init__(self, cfg: DictConfig):
+        self.cfg = cfg
+
+    def decode(self, params: torch.Tensor) -> tuple:
+        raise NotImplementedError
 
     def search_env(self, reset_noise: float | None = None) -> gym.Env:
         return make_juggle_env(self.cfg.env, reset_noise=reset_noise)
@@ -119,25 +117,51 @@ class FeedbackGainSpace:
         conditions = [dict(c) for c in self.cfg.algo.conditions]
         if reset_noise is not None:
             conditions = [{"reset_noise": reset_noise}]
-        return FeedbackRollouts(self.cfg.env, self.command, conditions, self.cfg.algo.workers)
+        return FeedbackRollouts(self.cfg.env, conditions, self.cfg.algo.workers)
 
     def policy(self, params: torch.Tensor, env: gym.Env) -> FeedbackPolicy:
-        return FeedbackPolicy(self.command, self.decode(params), env)
+        return FeedbackPolicy(*self.decode(params), env)
 
     def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
-        save_feedback_policy(run_dir / BEST_POLICY, self.command, self.decode(params), name)
+        save_feedback_policy(run_dir / BEST_POLICY, *self.decode(params), name)
         return BEST_POLICY
 
     def describe(self, params: torch.Tensor, name: str) -> dict:
-        return {"best_gains": asdict(self.decode(params)), "command": self.command.to_dict()}
+        command, gains = self.decode(params)
+        return {"best_gains": asdict(gains), "command": command.to_dict()}
+
+    def headline(self, metrics: dict) -> str:
+        return (
+            f"{self.cfg.algo.name} ({self.cfg.algo['update']}): best scored"
+            f" {metrics['best_throws']} throws over {len(self.cfg.algo.conditions)} conditions x"
+            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} samples"
+        )
+
+
+@SPACES.register("feedback_gains")
+class FeedbackGainSpace(ClosedLoopSpace):
+    """θ of ``FeedbackGains``; see the module docstring."""
+
+    def __init__(self, cfg: DictConfig):
+        super().__init__(cfg)
+        algo = cfg.algo
+        self.command = load_command(algo.command)
+        self.box = GainBox(algo.bounds)
+        self.start = torch.tensor([algo.start[name] for name in PARAM_NAMES], dtype=torch.float64)
+        problems = self.violations(self.start)
+        if problems:
+            raise ValueError(f"algo.start: outside algo.bounds: {'; '.join(problems)}")
+        self.stds = torch.tensor([algo.std[name] for name in PARAM_NAMES], dtype=torch.float64)
+
+    def project(self, params: torch.Tensor) -> torch.Tensor:
+        return self.box.project(params)
+
+    def violations(self, params: torch.Tensor) -> list[str]:
+        return self.box.violations(params)
+
+    def decode(self, params: torch.Tensor) -> tuple:
+        return self.command, gains_from_params(params)
 
     def record(self, distribution: SearchDistribution) -> dict[str, float]:
         means = zip(PARAM_NAMES, distribution.mean, strict=True)
         return {f"mean_{name}": float(mean) for name, mean in means}
-
-    def headline(self, metrics: dict) -> str:
-        return (
-            f"feedback ({self.cfg.algo['update']}): best gains scored {metrics['best_throws']}"
-            f" throws over {len(self.cfg.algo.conditions)} conditions x"
-            f" {self.cfg.env.duration:g} s after {metrics['rollouts']} samples"
-        )
