@@ -19,10 +19,10 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode
 from jugglerl.policies import load_policy
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import episode_blueprint
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.recording.names import EVAL
+from jugglerl.recording.names import SUMMARY
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="evaluate")
@@ -36,7 +36,7 @@ def main(cfg: DictConfig) -> None:
 
     with RerunLogger.from_config(cfg.logger, run_dir) as logger:
         logger.log_hparams(cfg)
-        logger.send_blueprint(juggling_blueprint(metric_groups=[EVAL]))
+        logger.send_blueprint(episode_blueprint(env.unwrapped.threshold))
         try:
             recorder = EpisodeRecorder(env, logger.recording, scene_fps=cfg.logger.scene_fps)
         except ValueError as error:
@@ -47,7 +47,7 @@ def main(cfg: DictConfig) -> None:
             sys.exit(f"interrupted: the episode so far is in {logger.path}")
         finally:
             recorder.close()  # sends what is buffered, closes the env
-        logger.log_metrics({f"{EVAL}/{key}": value for key, value in metrics.scalars().items()}, 0)
+        logger.log_table(SUMMARY, metrics.scalars())
 
     (run_dir / "metrics.json").write_text(json.dumps(metrics.to_dict(), indent=2) + "\n")
     print(json.dumps(metrics.to_dict(), indent=2))

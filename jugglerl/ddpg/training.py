@@ -38,7 +38,7 @@ from jugglerl.ddpg.exploration import make_exploration
 from jugglerl.ddpg.policy import ActorPolicy
 from jugglerl.ddpg.update import DDPGUpdate
 from jugglerl.evaluation import run_episode, summarise_episodes
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import DDPG_CURVES, training_blueprint
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import EVAL, TRAIN, join
@@ -88,7 +88,7 @@ class DDPGTraining:
         On Ctrl-C the checkpoint is brought up to date before ``KeyboardInterrupt`` propagates.
         """
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        logger.send_blueprint(juggling_blueprint(metric_groups=[TRAIN, EVAL]))
+        logger.send_blueprint(training_blueprint(DDPG_CURVES))
         collect = self.cfg.collector
         bar = tqdm(
             total=collect.total_frames,
@@ -254,7 +254,7 @@ class DDPGTraining:
         ]
         if check.record:
             envs[0].close()  # sends the recorded episode
-            logger.send_blueprint(juggling_blueprint(root, metric_groups=[TRAIN, EVAL]))
+            logger.send_blueprint(training_blueprint(DDPG_CURVES, root, self.cfg.env.threshold))
         summary = summarise_episodes(episodes, check.catch_time)
         record = {"frames": self.frames, "duration": duration, **summary}
         record["episodes"] = [episode.to_dict() for episode in episodes]

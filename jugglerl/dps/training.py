@@ -42,7 +42,7 @@ from jugglerl.dps.params import (
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.dps.updates import UpdateRule, make_update
 from jugglerl.evaluation import CommandPolicy, run_episode
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import SEARCH_CURVES, training_blueprint
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
@@ -140,7 +140,7 @@ class DPSTraining:
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:
         """Train until the roll-out budget is spent; returns the final metrics."""
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        logger.send_blueprint(juggling_blueprint(metric_groups=[DPS]))
+        logger.send_blueprint(training_blueprint(SEARCH_CURVES))
         bar = tqdm(
             total=self.cfg.algo.episodes,
             initial=self.collector.iteration,
@@ -213,7 +213,7 @@ class DPSTraining:
         )
         run_episode(recorder, self.best_policy(recorder), seed=self.best.seed)
         recorder.close()
-        logger.send_blueprint(juggling_blueprint(root, metric_groups=[DPS]))
+        logger.send_blueprint(training_blueprint(SEARCH_CURVES, root, self.cfg.env.threshold))
 
     def position(self) -> str:
         """How far the run has got, for messages."""
