@@ -17,6 +17,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from jugglerl.config import make_juggle_env
+from jugglerl.config_types import check_override_types
 from jugglerl.evaluation import run_episode
 from jugglerl.policies import load_policy
 from jugglerl.recording.blueprint import episode_blueprint
@@ -29,6 +30,7 @@ from jugglerl.recording.names import SUMMARY
 def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:
+        check_override_types()
         env = make_juggle_env(cfg.env, duration=cfg.duration)
         policy = load_policy(str(cfg.policy), env)
     except ValueError as error:

@@ -22,6 +22,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
+from jugglerl.config_types import check_override_types
 from jugglerl.recording.logger import RerunLogger
 
 ALGOS = ("ddpg", "dps", "feedback")
@@ -83,6 +84,7 @@ def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
 def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:
+        check_override_types()
         state = None
         if cfg.resume is not None:
             try:
