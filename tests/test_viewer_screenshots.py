@@ -15,13 +15,13 @@ from viewer import opening_views, screenshot, views_without_data
 from jugglerl.recording.blueprint import DDPG_CURVES, episode_blueprint, training_blueprint
 from jugglerl.recording.names import SIM_TIME, STEP
 
-#: About 7 s on 2 cores: two batches of 128 frames, episodes of 2 s, so that training episodes
+#: About 7 s on 2 cores: two batches of 128 frames, episodes of 1 s, so that training episodes
 #: finish (return, throws) and two evaluations (each recorded) happen.
 SHORT_DDPG = [
     "collector.num_envs=2",
     "collector.frames_per_batch=128",
     "collector.total_frames=256",
-    "env.duration=2",
+    "env.duration=1",
     "eval.every_frames=128",
     "eval.seeds=1",
     "eval.duration=2",

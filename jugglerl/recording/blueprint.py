@@ -7,11 +7,13 @@
   run, one panel per kind of quantity (``DDPG_CURVES``, ``SEARCH_CURVES``), and the config; the
   latest recorded episode (on ``sim_time``) in a second tab.
 
-The viewer's side panels start collapsed so the views get the window.
+The viewer's side panels start collapsed, so the views get the window, and the time cursor starts
+at the end of the recording ("following"), where the whole run has arrived.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -43,6 +45,9 @@ HEADROOM = 0.3
 #: Line colours of a panel's metrics, in order: distinct within a panel, whatever the paths.
 PALETTE = ([230, 60, 60], [40, 160, 255], [255, 200, 0], [80, 200, 120], [200, 120, 255])
 
+#: y-axis of a fraction: 0 and 1 drawn inside the plot, not on its edges.
+FRACTION = (-0.05, 1.05)
+
 WHOLE_TIMELINE = rrb.TimeRange(
     start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
 )
@@ -68,12 +73,10 @@ class Curve:
 
 #: DDPG (``train/*`` per collected batch, ``eval/*`` per evaluation; step = env frames).
 DDPG_CURVES = (
-    Curve(
-        "throws and catches per episode",
-        (f"{TRAIN}/throws", f"{TRAIN}/catches", f"{EVAL}/mean_throws", f"{EVAL}/mean_catches"),
-    ),
+    Curve("throws per episode", (f"{TRAIN}/throws", f"{EVAL}/mean_throws")),
+    Curve("catches per episode", (f"{TRAIN}/catches", f"{EVAL}/mean_catches")),
     Curve("time up per episode (s)", (f"{TRAIN}/episode_seconds", f"{EVAL}/mean_time_to_drop")),
-    Curve("catch rate (evaluation)", (f"{EVAL}/catch_rate",), legend=None, y_range=(0.0, 1.0)),
+    Curve("catch rate (evaluation)", (f"{EVAL}/catch_rate",), legend=None, y_range=FRACTION),
     Curve("return per episode (training)", (f"{TRAIN}/return",), legend=None),
     Curve("reward per step (training)", (f"{TRAIN}/reward",), legend=None),
     Curve("critic loss", (f"{TRAIN}/loss_critic",), legend=None),
@@ -86,7 +89,7 @@ SEARCH_THROWS = tuple(f"{DPS}/{name}" for name in ("best_throws", "max_throws", 
 SEARCH_DROPPED = f"{DPS}/dropped_fraction"
 SEARCH_CURVES = (
     Curve("throws per roll-out", SEARCH_THROWS),
-    Curve("dropped fraction of the roll-outs", (SEARCH_DROPPED,), legend=None, y_range=(0.0, 1.0)),
+    Curve("dropped fraction of the roll-outs", (SEARCH_DROPPED,), legend=None, y_range=FRACTION),
     # whatever else the search logs: the distribution's cycle (DPS) or mean gains (feedback)
     Curve("search distribution", (f"{DPS}/**",), excluded=(*SEARCH_THROWS, SEARCH_DROPPED)),
 )
@@ -101,7 +104,7 @@ def episode_blueprint(threshold: float) -> rrb.Blueprint:
     scene, height = episode_views("", threshold)
     return rrb.Blueprint(
         rrb.Horizontal(scene, rrb.Vertical(height, text, row_shares=[3, 2]), column_shares=[3, 2]),
-        rrb.TimePanel(timeline=SIM_TIME, state="collapsed"),
+        rrb.TimePanel(timeline=SIM_TIME, state="collapsed", play_state="following"),
         *collapsed_side_panels(),
     )
 
@@ -113,7 +116,8 @@ def training_blueprint(
     ``episode_root``, the episode recorded there (ball height over ``threshold``) in a tab."""
     views = [curve_view(curve) for curve in curves]
     views.append(rrb.TextDocumentView(origin=HPARAMS, name="config"))
-    tabs = [rrb.Grid(*views, grid_columns=(len(views) + 1) // 2, name="learning curves")]
+    columns = math.ceil(math.sqrt(len(views)))
+    tabs = [rrb.Grid(*views, grid_columns=columns, name="learning curves")]
     if episode_root is not None:
         scene, height = episode_views(episode_root, threshold)
         tabs.append(
@@ -121,7 +125,7 @@ def training_blueprint(
         )
     return rrb.Blueprint(
         rrb.Tabs(*tabs, active_tab=0),
-        rrb.TimePanel(timeline=STEP, state="collapsed"),
+        rrb.TimePanel(timeline=STEP, state="collapsed", play_state="following"),
         *collapsed_side_panels(),
     )
 
@@ -148,7 +152,7 @@ def curve_view(curve: Curve) -> rrb.TimeSeriesView:
             if not path.endswith("/**")
         },
         axis_x=rrb.TimeAxis(view_range=WHOLE_TIMELINE),
-        axis_y=rrb.ScalarAxis(range=curve.y_range),
+        axis_y=None if curve.y_range is None else rrb.ScalarAxis(range=curve.y_range),
         time_ranges=rrb.VisibleTimeRange(STEP, range=WHOLE_TIMELINE),
     )
 
