@@ -167,6 +167,7 @@ def episode_views(root: str, threshold: float) -> tuple[rrb.Spatial3DView, rrb.T
     height = rrb.TimeSeriesView(
         origin=join(root, PLOTS),
         name="ball height (m)",
+        axis_x=rrb.TimeAxis(view_range=WHOLE_TIMELINE),  # the whole episode, not a window
         axis_y=rrb.ScalarAxis(range=(0.0, threshold + HEADROOM)),
         # the ball never falls below the cup while juggling: the bottom right is free
         plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.RightBottom, visible=True),
