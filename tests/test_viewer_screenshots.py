@@ -35,13 +35,15 @@ SHORT_DDPG = [
 
 
 def check_opening(recording: Path, out: Path, blueprint, timeline: str) -> dict:
-    """Screenshot ``recording`` as it opens; check the timeline, the views' data and reports."""
+    """Check that the views ``blueprint`` opens with have data on ``timeline`` (from the file),
+    then screenshot ``recording`` as it opens: the viewer shows that layout on that timeline,
+    and no view reports an error."""
+    expected = opening_views(blueprint)
+    assert views_without_data(recording, expected, timeline) == []
     state = screenshot(recording, out)
     assert state["recordings"][0]["current_timeline"] == timeline
     shown = {view["name"] for view in state["views"]}
-    expected = opening_views(blueprint)
     assert {str(view.name) for view in expected} <= shown, "the viewer shows another layout"
-    assert views_without_data(recording, expected, timeline) == []
     assert [(v["name"], v["reports"]) for v in state["views"] if v["reports"]] == []
     image = iio.imread(out)
     assert image.shape[:2] == (1000, 1600)  # the tool's default SIZE
