@@ -10,10 +10,11 @@ from pathlib import Path
 import imageio.v3 as iio
 import numpy as np
 from cli import run_script, run_train
-from viewer import opening_views, screenshot, views_without_data
+from viewer import opening_views, screenshot, shows, views_without_data
 
 from jugglerl.recording.blueprint import DDPG_CURVES, episode_blueprint, training_blueprint
-from jugglerl.recording.names import SIM_TIME, STEP
+from jugglerl.recording.names import EVAL, SIM_TIME, STEP, TRAIN
+from jugglerl.recording.reading import entities
 
 #: About 7 s on 2 cores: two batches of 128 frames, episodes of 1 s, so that training episodes
 #: finish (return, throws) and two evaluations (each recorded) happen.
@@ -64,6 +65,14 @@ def test_an_evaluated_episode_opens_on_sim_time_with_every_view_showing_data(tmp
 def test_a_training_run_opens_on_its_learning_curves_with_every_view_showing_data(tmp_path):
     result = run_train(*SHORT_DDPG, f"hydra.run.dir={tmp_path}")
     assert result.returncode == 0, result.stderr
+    metrics = {name for name in entities(tmp_path / "train.rrd") if name.count("/") == 1}
+    views = opening_views(training_blueprint(DDPG_CURVES))
+    in_no_panel = {
+        name
+        for name in metrics
+        if name.split("/")[0] in (TRAIN, EVAL) and not any(shows(view, name) for view in views)
+    }
+    assert in_no_panel == {f"{TRAIN}/frames"}  # only the frame count, which is the step itself
     state = check_opening(
         tmp_path / "train.rrd", tmp_path / "train.png", training_blueprint(DDPG_CURVES), STEP
     )

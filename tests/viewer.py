@@ -68,18 +68,22 @@ def views_without_data(recording: Path, views: list[rrb.View], timeline: str) ->
         (chunk.entity_path.strip("/"), set(chunk.timeline_names))
         for chunk in RrdReader(recording).stream()
     ]
-    empty = []
-    for view in views:
-        included, excluded = queried_paths(view)
-        static_ok = isinstance(view, rrb.TextDocumentView)
-        if not any(
-            matches(entity, included)
-            and not matches(entity, excluded)
-            and (static_ok or timeline in timelines)
-            for entity, timelines in chunks
-        ):
-            empty.append(str(view.name))
-    return empty
+    return [
+        str(view.name) for view in views if not any(has_data(view, c, timeline) for c in chunks)
+    ]
+
+
+def has_data(view: rrb.View, chunk: tuple[str, set[str]], timeline: str) -> bool:
+    """The ``(entity, timelines)`` chunk is data ``view`` draws on ``timeline``."""
+    entity, timelines = chunk
+    static_is_enough = isinstance(view, rrb.TextDocumentView)
+    return shows(view, entity) and (static_is_enough or timeline in timelines)
+
+
+def shows(view: rrb.View, entity: str) -> bool:
+    """``entity`` is among the entities ``view``'s contents query."""
+    included, excluded = queried_paths(view)
+    return matches(entity, included) and not matches(entity, excluded)
 
 
 def queried_paths(view: rrb.View) -> tuple[list[str], list[str]]:

@@ -113,7 +113,8 @@ def training_blueprint(
     curves: Sequence[Curve], episode_root: str | None = None, threshold: float = 1.0
 ) -> rrb.Blueprint:
     """Layout of a training run's ``train.rrd``: ``curves`` and the config on ``step``; with
-    ``episode_root``, the episode recorded there (ball height over ``threshold``) in a tab."""
+    ``episode_root``, the episode recorded there in a tab (its ball height over ``threshold``,
+    m; the env's default is 1 m)."""
     views = [curve_view(curve) for curve in curves]
     views.append(rrb.TextDocumentView(origin=HPARAMS, name="config"))
     columns = math.ceil(math.sqrt(len(views)))
