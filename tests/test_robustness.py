@@ -123,9 +123,7 @@ def test_the_script_writes_table_plot_json_and_recording(tmp_path):
 
 def test_the_script_names_an_unknown_policy(tmp_path):
     result = run_script(
-        "robustness.py",
-        "policies=[expert,juggler9000]",
-        "reference=expert",
+        "robustness.py", "policies=[expert,juggler9000]", "reference=expert",
         f"hydra.run.dir={tmp_path}",
     )
     assert result.returncode == 1
