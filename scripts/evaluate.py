@@ -18,17 +18,19 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from jugglerl.config import make_juggle_env
+from jugglerl.config_types import check_override_types
 from jugglerl.policies.loading import load_policy
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import episode_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.recording.names import EVAL
+from jugglerl.recording.names import SUMMARY
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="evaluate")
 def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:
+        check_override_types()
         env = make_juggle_env(cfg.env, duration=cfg.duration)
         policy = load_policy(str(cfg.policy), env)
     except ValueError as error:
@@ -36,7 +38,7 @@ def main(cfg: DictConfig) -> None:
 
     with RerunLogger.from_config(cfg.logger, run_dir) as logger:
         logger.log_hparams(cfg)
-        logger.send_blueprint(juggling_blueprint(metric_groups=[EVAL]))
+        logger.send_blueprint(episode_blueprint(env.unwrapped.threshold))
         try:
             metrics = record_episode(
                 env, policy, logger.recording, seed=int(cfg.seed), scene_fps=cfg.logger.scene_fps
@@ -45,7 +47,7 @@ def main(cfg: DictConfig) -> None:
             sys.exit(f"error: logger.{error}")
         except KeyboardInterrupt:
             sys.exit(f"interrupted: the episode so far is in {logger.path}")
-        logger.log_metrics({f"{EVAL}/{key}": value for key, value in metrics.scalars().items()}, 0)
+        logger.log_table(SUMMARY, metrics.scalars())
 
     (run_dir / "metrics.json").write_text(json.dumps(metrics.to_dict(), indent=2) + "\n")
     print(json.dumps(metrics.to_dict(), indent=2))

@@ -24,6 +24,7 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
 from jugglerl import robustness
+from jugglerl.config_types import check_override_types
 from jugglerl.recording.logger import RerunLogger
 
 ROOT = "robustness"
@@ -47,6 +48,7 @@ def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     policies = [str(p) for p in cfg.policies]
     try:
+        check_override_types()
         families = robustness.families_from_config(cfg.families, cfg.env, cfg.select)
         if cfg.reference not in policies:
             raise ValueError(f"reference={cfg.reference} must be one of policies={policies}")

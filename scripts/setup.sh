@@ -1,12 +1,27 @@
 #!/usr/bin/env bash
 # Create ./.venv and install JuggleRL (editable) with its test tools. Safe to re-run.
+# Prints a line per step; pip's own output (pages of setuptools warnings) only when a step fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3.11}
 command -v "$PYTHON" >/dev/null 2>&1 || PYTHON=python3
-[ -x .venv/bin/python ] || "$PYTHON" -m venv .venv
-.venv/bin/python -m pip install --quiet --upgrade pip
+LOG=$(mktemp -t jugglerl-setup.XXXXXX.log)
+trap 'rm -f "$LOG"' EXIT
+
+step() {  # step DESCRIPTION COMMAND...: run quietly, show the log if it fails
+    echo "setup: $1"
+    if ! "${@:2}" >"$LOG" 2>&1; then
+        cat "$LOG" >&2
+        echo "setup: failed: $1" >&2
+        exit 1
+    fi
+}
+
+[ -x .venv/bin/python ] || step "creating .venv with $PYTHON" "$PYTHON" -m venv .venv
+step "upgrading pip" .venv/bin/python -m pip install --quiet --upgrade pip
 # torch first, pinned: on this project's machines 2.13.0 is a local CPU build, while a looser
 # request lets pip resolve the newest release with several GB of CUDA wheels.
-.venv/bin/python -m pip install --quiet "torch==2.13.0"
-.venv/bin/python -m pip install --quiet -e ".[test]"
+step "installing torch 2.13.0" .venv/bin/python -m pip install --quiet "torch==2.13.0"
+step "installing jugglerl (editable) and its test tools" \
+    .venv/bin/python -m pip install --quiet -e ".[test]"
+echo "setup: done: .venv/bin/python ($(.venv/bin/python --version 2>&1))"

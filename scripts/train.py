@@ -20,6 +20,7 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
+from jugglerl.config_types import check_override_types
 from jugglerl.training import resume_state, train
 
 
@@ -27,6 +28,7 @@ from jugglerl.training import resume_state, train
 def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:
+        check_override_types()
         state = None
         if cfg.resume is not None:
             overrides = list(HydraConfig.get().overrides.task)

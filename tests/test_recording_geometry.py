@@ -5,7 +5,9 @@ import numpy as np
 import rerun as rr
 
 from jugglerl.recording.geometry import (
+    PLANE_HALF_WIDTH,
     body_paths,
+    geom_colour,
     geom_shape,
     moving_bodies,
     multiply,
@@ -73,3 +75,17 @@ def test_primitive_geoms_become_the_matching_rerun_shapes():
     # rerun's capsule starts at its origin: shifted back by half a length to be centred
     assert np.allclose(upper_arm.lengths.as_arrow_array().to_pylist(), [2 * half_length])
     assert np.allclose(upper_arm.translations.as_arrow_array().to_pylist(), [[0, 0, -half_length]])
+
+
+def test_the_floor_is_drawn_dark_and_no_wider_than_the_arm_needs():
+    """MuJoCo draws the floor in its checker texture (dark blue), not its material's white."""
+    model = JuggleEnv().model
+    floor = model.geom("floor").id
+    red, green, blue, alpha = geom_colour(model, floor)
+    assert max(red, green, blue) < 100 and blue > red and alpha == 255  # 0.1-0.4 in the XML
+    half_sizes = geom_shape(model, floor).half_sizes.as_arrow_array().to_pylist()[0]
+    assert model.geom_size[floor][0] > PLANE_HALF_WIDTH  # the model's floor is 6 m wide
+    assert np.allclose(half_sizes[:2], [PLANE_HALF_WIDTH] * 2)
+    assert tuple(geom_colour(model, model.geom("ball").id)) == tuple(
+        np.round(model.geom_rgba[model.geom("ball").id] * 255)
+    )  # geoms without a material keep their own colour

@@ -33,7 +33,7 @@ from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces import SPACES
 from jugglerl.dps.updates import make_update
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import SEARCH_CURVES, training_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
@@ -85,7 +85,7 @@ class SearchTraining:
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:
         """Search until the roll-out budget is spent; returns the final metrics."""
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        logger.send_blueprint(juggling_blueprint(metric_groups=[DPS]))
+        logger.send_blueprint(training_blueprint(SEARCH_CURVES))
         bar = tqdm(
             total=self.cfg.algo.episodes,
             initial=self.collector.iteration,
@@ -159,7 +159,7 @@ class SearchTraining:
         policy = self.space.policy(self.best.params, env)
         fps = self.cfg.logger.scene_fps
         record_episode(env, policy, logger.recording, root, self.best.seed, fps)
-        logger.send_blueprint(juggling_blueprint(root, metric_groups=[DPS]))
+        logger.send_blueprint(training_blueprint(SEARCH_CURVES, root, self.cfg.env.threshold))
 
     @property
     def best_name(self) -> str:

@@ -16,10 +16,10 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode, summarise_episodes
 from jugglerl.policies.actor import ActorPolicy
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import OFFPOLICY_CURVES, training_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.recording.names import EVAL, TRAIN, join
+from jugglerl.recording.names import EVAL, join
 
 
 class Evaluations:
@@ -43,7 +43,8 @@ class Evaluations:
                 recorded = make_juggle_env(self.cfg.env, duration=duration)
                 stream, fps = logger.recording, self.cfg.logger.scene_fps
                 episodes.append(record_episode(recorded, policy, stream, root, seed, fps))
-                logger.send_blueprint(juggling_blueprint(root, metric_groups=[TRAIN, EVAL]))
+                blueprint = training_blueprint(OFFPOLICY_CURVES, root, self.cfg.env.threshold)
+                logger.send_blueprint(blueprint)
             else:
                 episodes.append(run_episode(env, policy, seed=seed))
         env.close()

@@ -47,9 +47,9 @@ from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.teacher import TeacherModule
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
-from jugglerl.recording.blueprint import juggling_blueprint
+from jugglerl.recording.blueprint import OFFPOLICY_CURVES, training_blueprint
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.recording.names import EVAL, TRAIN, join
+from jugglerl.recording.names import TRAIN, join
 
 METRICS = "metrics.json"
 
@@ -95,7 +95,7 @@ class OffPolicyTraining:
         """Train to the frame budget, evaluate in full, return the final metrics. On Ctrl-C the
         checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        logger.send_blueprint(juggling_blueprint(metric_groups=[TRAIN, EVAL]))
+        logger.send_blueprint(training_blueprint(OFFPOLICY_CURVES))
         collect = self.cfg.collector
         bar = tqdm(
             total=collect.total_frames,

@@ -5,9 +5,9 @@
 - ``episode.EpisodeRecorder``: a Gymnasium wrapper that records episodes of the juggling env in 3D
   on a ``sim_time`` timeline, with the ball-height plot and a marker per counted throw.
 - ``geometry``: the scene's primitive geoms as rerun archetypes, and body poses per frame.
-- ``blueprint``: the default viewer layout.
+- ``blueprint``: the layout each kind of recording opens with (episode, DDPG, searches).
 
 Entity paths: ``world/...`` (scene, the ball at ``world/ball``), ``plots/...`` (ball height),
-``train/...``, ``eval/...``, ``dps/...`` (metrics). The episode recorder and the blueprint do not
-import torch; ``logger`` does (through TorchRL).
+``train/...``, ``eval/...``, ``dps/...`` (metrics), ``hparams`` and ``summary`` (text). The
+episode recorder and the blueprint do not import torch; ``logger`` does (through TorchRL).
 """

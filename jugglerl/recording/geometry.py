@@ -16,6 +16,11 @@ import rerun as rr
 
 #: Filled shapes read better than wireframes in the viewer.
 SOLID = rr.components.FillMode.Solid
+#: Half width (m) up to which a plane is drawn: the arm reaches less than 1 m, and a larger floor
+#: would only make the viewer's default framing take in empty floor.
+PLANE_HALF_WIDTH = 1.2
+#: Index of the colour texture in ``model.mat_texid`` (MuJoCo's ``mjTEXROLE_RGB``).
+RGB_TEXTURE = int(mujoco.mjtTextureRole.mjTEXROLE_RGB)
 
 
 def body_paths(model: mujoco.MjModel, world_path: str) -> list[str]:
@@ -63,7 +68,11 @@ def geom_shape(model: mujoco.MjModel, geom: int):
     if kind == mujoco.mjtGeom.mjGEOM_BOX:
         return rr.Boxes3D(half_sizes=[size], **style)
     if kind == mujoco.mjtGeom.mjGEOM_PLANE:  # a thin slab just below the plane's surface
-        half_sizes = [size[0] or 5.0, size[1] or 5.0, 0.001]  # size 0: an infinite plane
+        half_sizes = [  # size 0: an infinite plane
+            min(size[0] or PLANE_HALF_WIDTH, PLANE_HALF_WIDTH),
+            min(size[1] or PLANE_HALF_WIDTH, PLANE_HALF_WIDTH),
+            0.001,
+        ]
         return rr.Boxes3D(half_sizes=[half_sizes], centers=[[0, 0, -0.001]], **style)
     if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
         return rr.Ellipsoids3D(radii=[size[0]], **style)
@@ -79,10 +88,25 @@ def geom_shape(model: mujoco.MjModel, geom: int):
 
 
 def geom_colour(model: mujoco.MjModel, geom: int) -> np.ndarray:
-    """RGBA (0-255) as MuJoCo draws it: the material's colour when the geom has one."""
+    """RGBA (0-255) as MuJoCo draws it: the material's colour when the geom has one, tinted by
+    the mean colour of the material's texture (the floor's checker is dark blue, not white)."""
     material = model.geom_matid[geom]
-    rgba = model.mat_rgba[material] if material >= 0 else model.geom_rgba[geom]
-    return np.round(np.asarray(rgba) * 255).astype(np.uint8)
+    if material < 0:
+        return np.round(model.geom_rgba[geom] * 255).astype(np.uint8)
+    rgba = model.mat_rgba[material].copy()
+    texture = model.mat_texid[material, RGB_TEXTURE]
+    if texture >= 0:
+        rgba[:3] *= texture_mean_rgb(model, texture)
+    return np.round(rgba * 255).astype(np.uint8)
+
+
+def texture_mean_rgb(model: mujoco.MjModel, texture: int) -> np.ndarray:
+    """Mean RGB (0-1) of a texture's texels."""
+    channels = model.tex_nchannel[texture]
+    size = model.tex_height[texture] * model.tex_width[texture] * channels
+    start = model.tex_adr[texture]
+    texels = model.tex_data[start : start + size].reshape(-1, channels)
+    return texels[:, :3].mean(axis=0) / 255.0
 
 
 def relative_poses(

@@ -16,7 +16,7 @@ import yaml
 from omegaconf import DictConfig, OmegaConf
 from torchrl.record.loggers import Logger
 
-from jugglerl.recording.names import STEP
+from jugglerl.recording.names import HPARAMS, STEP
 
 APP_ID = "jugglerl"
 
@@ -106,14 +106,23 @@ class RerunLogger(Logger):
 
     # --- other records --------------------------------------------------------------------
     def log_hparams(self, cfg: DictConfig | Mapping[str, Any]) -> None:
-        """The run's configuration, as a YAML text document at entity ``hparams``."""
+        """The run's configuration, as a YAML text document at entity ``hparams`` (static)."""
         if isinstance(cfg, DictConfig):
             text = OmegaConf.to_yaml(cfg, resolve=True)
         else:
             text = yaml.safe_dump(dict(cfg), sort_keys=False)
         document = f"```yaml\n{text}```\n"
         self.experiment.log(
-            "hparams", rr.TextDocument(document, media_type="text/markdown"), static=True
+            HPARAMS, rr.TextDocument(document, media_type="text/markdown"), static=True
+        )
+
+    def log_table(self, name: str, values: Mapping[str, float]) -> None:
+        """``values`` as a two-column markdown table at entity ``name`` (static): a result that
+        is logged once reads better as text than as a single point in a plot."""
+        rows = "".join(f"| {key} | {value:g} |\n" for key, value in values.items())
+        document = f"| metric | value |\n| --- | --- |\n{rows}"
+        self.experiment.log(
+            name, rr.TextDocument(document, media_type="text/markdown"), static=True
         )
 
     def log_histogram(

@@ -7,6 +7,8 @@ PLOTS = "plots"  # per-episode time series: plots/ball_height, plots/threshold, 
 TRAIN = "train"  # training metrics
 EVAL = "eval"  # evaluation metrics
 DPS = "dps"  # direct policy search: throws per episode, current via-points
+HPARAMS = "hparams"  # the run's resolved config, a markdown text document
+SUMMARY = "summary"  # an evaluated episode's metrics, a markdown table
 
 STEP = "step"  # training progress: env frames (DDPG) or roll-outs (DPS)
 SIM_TIME = "sim_time"  # seconds of simulated time since an episode's reset

@@ -1,0 +1,65 @@
+"""Command-line overrides checked against the types of the defaults they replace.
+
+Hydra takes ``optim.lr_actor=abc`` as the string ``"abc"`` (the configs have no schema), and the
+mistake surfaces much later as a traceback deep in the training code. ``check_override_types``,
+called first thing in a script's ``main``, turns it into one line naming the key and the type
+its default has: ``optim.lr_actor=abc: expected a number (float)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from hydra import compose
+from hydra.core.hydra_config import HydraConfig
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from omegaconf import DictConfig, ListConfig, OmegaConf
+
+_ABSENT = object()
+
+
+def check_override_types(overrides: Sequence[str] | None = None) -> None:
+    """Raise ``ValueError`` for the first override whose value has another type than its default.
+
+    ``overrides`` default to the running Hydra app's command line. The defaults are the app's
+    config composed with the command line's group choices only (``actor=lstm``), so a key is
+    compared with the default of the group actually chosen. Keys without a default (``+key=``),
+    defaults that are ``null``, sweeps and deletions are not checked.
+    """
+    hydra = HydraConfig.get()
+    if overrides is None:
+        overrides = list(hydra.overrides.task)
+    parsed = OverridesParser.create().parse_overrides(list(overrides))
+    groups = set(hydra.runtime.choices)
+    choices = [str(o.input_line) for o in parsed if o.key_or_group in groups]
+    defaults = compose(hydra.job.config_name, overrides=choices)
+    for override in parsed:
+        if override.key_or_group in groups or override.is_delete() or override.is_sweep_override():
+            continue
+        default = OmegaConf.select(defaults, override.key_or_group, default=_ABSENT)
+        problem = type_mismatch(default, override.value())
+        if problem:
+            raise ValueError(f"{override.input_line}: expected {problem}")
+
+
+def type_mismatch(default, value) -> str | None:
+    """What ``value`` should have been to replace ``default`` (e.g. ``"a number (float)"``),
+    or ``None`` when it fits: an int fits a float, any scalar fits a string, anything fits a
+    default that is absent or ``null``."""
+    if default is _ABSENT or default is None or value is None:
+        return None
+    if isinstance(default, bool):
+        return None if isinstance(value, bool) else "true or false (bool)"
+    if isinstance(default, int):
+        fits = isinstance(value, int) and not isinstance(value, bool)
+        return None if fits else "an integer (int)"
+    if isinstance(default, float):
+        fits = isinstance(value, (int, float)) and not isinstance(value, bool)
+        return None if fits else "a number (float)"
+    if isinstance(default, str):
+        return None if isinstance(value, (str, int, float, bool)) else "a string"
+    if isinstance(default, ListConfig):
+        return None if isinstance(value, list) else "a list, e.g. [a,b]"
+    if isinstance(default, DictConfig):
+        return None if isinstance(value, dict) else "a mapping, e.g. {key:value}"
+    return None

@@ -1,0 +1,51 @@
+"""A command-line override of the wrong type ends the scripts with one line naming key and type."""
+
+import pytest
+from cli import run_script
+from omegaconf import OmegaConf
+
+from jugglerl.config_types import type_mismatch
+
+
+@pytest.mark.parametrize(
+    ("script", "override", "message"),
+    [
+        ("train.py", "optim.lr_actor=abc", "error: optim.lr_actor=abc: expected a number (float)"),
+        # a group choice on the same line selects the default compared with: actor/lstm.yaml's
+        (
+            "train.py",
+            "actor=lstm actor.hidden_size=1e2",
+            "error: actor.hidden_size=1e2: expected an integer (int)",
+        ),
+        ("evaluate.py", "seed=1.5", "error: seed=1.5: expected an integer (int)"),
+        ("robustness.py", "seeds=x", "error: seeds=x: expected an integer (int)"),
+    ],
+)
+def test_a_mistyped_override_is_one_error_line(tmp_path, script, override, message):
+    result = run_script(script, *override.split(), f"hydra.run.dir={tmp_path}")
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines()[-1].endswith(message)
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("default", "value", "expected"),
+    [
+        (1.0e-4, "abc", "a number (float)"),
+        (1.0e-4, 3, None),  # an int is a number
+        (1.0e-4, True, "a number (float)"),
+        (61440, 1.5, "an integer (int)"),
+        (61440, 2048, None),
+        (True, "yes", "true or false (bool)"),
+        (False, True, None),
+        ("expert", 3, None),  # policy=3 is a name too
+        ("expert", [1], "a string"),
+        (None, "anything", None),  # a null default takes any value
+        (OmegaConf.create([256, 256]), 5, "a list, e.g. [a,b]"),
+        (OmegaConf.create([256, 256]), [64], None),
+        (OmegaConf.create({"a": 1}), 1, "a mapping, e.g. {key:value}"),
+        (1.0, None, None),  # null switches a key off
+    ],
+)
+def test_values_are_compared_with_the_type_of_the_default(default, value, expected):
+    assert type_mismatch(default, value) == expected
