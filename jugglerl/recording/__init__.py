@@ -3,9 +3,10 @@
 - ``logger.RerunLogger``: TorchRL ``Logger`` over a ``rerun.RecordingStream`` (scalars, histograms,
   hyper-parameters); owns the file and closes it cleanly.
 - ``episode.EpisodeRecorder``: a Gymnasium wrapper that records episodes of the juggling env in 3D
-  on a ``sim_time`` timeline, with the ball-height plot and a marker per counted throw.
+  on a ``sim_time`` timeline, with the ball-height plot and a marker per counted throw;
+  ``episode.record_episode``: one recorded episode of a policy.
 - ``geometry``: the scene's primitive geoms as rerun archetypes, and body poses per frame.
-- ``blueprint``: the layout each kind of recording opens with (episode, DDPG, searches).
+- ``blueprint``: the layout each kind of recording opens with (episode, off-policy training, searches).
 
 Entity paths: ``world/...`` (scene, the ball at ``world/ball``), ``plots/...`` (ball height),
 ``train/...``, ``eval/...``, ``dps/...`` (metrics), ``hparams`` and ``summary`` (text). The
