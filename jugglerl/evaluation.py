@@ -34,6 +34,7 @@ class EpisodeMetrics:
             "catches": self.catches,
             "max_consecutive_catches": self.max_consecutive_catches,
             "duration": self.duration,
+            "max_cup_height": self.max_cup_height,
         }
         if self.time_to_drop is not None:
             values["time_to_drop"] = self.time_to_drop
