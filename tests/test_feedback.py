@@ -193,3 +193,22 @@ def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming {run_dir} at episode 2" in resumed.stdout
     assert json.loads((run_dir / "metrics.json").read_text())["rollouts"] == 6
+
+
+def test_every_shipped_policy_keeps_its_throws_honest():
+    """The cup's throat never rises above 0.76 m, so a counted throw rose 0.24 m in free flight."""
+    from jugglerl.policies.files import shipped_names
+
+    for name in shipped_names():
+        env = JuggleEnv()
+        metrics = run_episode(env, load_policy(name, env), seed=0)
+        assert metrics.max_cup_height <= 0.76 and metrics.throws >= 39, name
+
+
+def test_the_tolerant_closed_loop_keeps_its_throws_under_action_noise():
+    env = JuggleEnv(action_noise=0.003)
+    tolerant, shipped = load_policy("closed_loop_tolerant", env), load_policy("closed_loop", env)
+    tolerant_throws = [run_episode(env, tolerant, seed).throws for seed in (0, 1)]
+    shipped_throws = [run_episode(env, shipped, seed).throws for seed in (0, 1)]
+    assert sum(tolerant_throws) > sum(shipped_throws)
+    assert run_episode(JuggleEnv(), tolerant, seed=0).throws >= 55

@@ -6,7 +6,7 @@
   on a ``sim_time`` timeline, with the ball-height plot and a marker per counted throw;
   ``episode.record_episode``: one recorded episode of a policy.
 - ``geometry``: the scene's primitive geoms as rerun archetypes, and body poses per frame.
-- ``blueprint``: the layout each kind of recording opens with (episode, off-policy training, searches).
+- ``blueprint``: the layout each kind of recording opens with (episode, training, searches).
 
 Entity paths: ``world/...`` (scene, the ball at ``world/ball``), ``plots/...`` (ball height),
 ``train/...``, ``eval/...``, ``dps/...`` (metrics), ``hparams`` and ``summary`` (text). The
