@@ -45,7 +45,6 @@ def train(cfg, run_dir, state=None) -> tuple[dict, OffPolicyTraining]:
 @pytest.mark.parametrize(
     "overrides",
     [
-        ["actor=mlp"],
         ["actor=lstm"],
         ["actor=residual"],
         ["algo=td3", "actor=lstm"],
