@@ -87,7 +87,8 @@ class OffPolicyTraining:
         """The teacher acting in the loop, when ``teacher.policy`` names one."""
         if self.cfg.teacher.policy is None:
             return []
-        teacher = load_policy(str(self.cfg.teacher.policy), make_juggle_env(self.cfg.env))
+        with make_juggle_env(self.cfg.env) as template:  # what the policy reads of the env
+            teacher = load_policy(str(self.cfg.teacher.policy), template)
         return [TeacherModule(teacher, self.cfg.collector.num_envs)]
 
     # --- the loop -------------------------------------------------------------------------

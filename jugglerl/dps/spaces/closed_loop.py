@@ -24,7 +24,7 @@ from jugglerl.dps.params import (
 )
 from jugglerl.dps.spaces import SPACES
 from jugglerl.dps.spaces.feedback_gains import ClosedLoopSpace, GainBox, gains_from_params
-from jugglerl.policies.feedback import PARAM_NAMES
+from jugglerl.policies.feedback import PARAM_NAMES, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
 
 
@@ -37,7 +37,7 @@ class CommandAndGainSpace(ClosedLoopSpace):
         algo = cfg.algo
         env = self.search_env()
         start = load_policy(algo.start, env)
-        if not hasattr(start, "gains"):
+        if not isinstance(start, FeedbackPolicy):
             raise ValueError(f"algo.start={algo.start} is not a feedback policy (kind: feedback)")
         self.pan, self.lead_in = start.command.pan, start.command.lead_in
         self.constraints = ViaPointConstraints.from_model(

@@ -30,6 +30,16 @@ def behaviour_cloning_loss(actor: TensorDictModule, batch: TensorDictBase) -> to
     return torch.nn.functional.mse_loss(predicted, batch[TEACHER_ACTION])
 
 
+def add_cloning_term(total, actor, batch, weight: float, losses: dict) -> torch.Tensor:
+    """``total`` plus ``weight`` times the cloning loss (recorded in ``losses``) when positive:
+    the term the RL losses add beside their own (``algo.bc_weight``)."""
+    if weight <= 0:
+        return total
+    loss_bc = behaviour_cloning_loss(actor, batch)
+    losses["loss_bc"] = float(loss_bc.detach())
+    return total + weight * loss_bc
+
+
 class CloningModule(LossModule):
     """A ``LossModule`` holding the actor, so that its weights checkpoint as the others' do."""
 

@@ -14,7 +14,7 @@ from torchrl.objectives import DDPGLoss, ValueEstimators
 
 from jugglerl.offpolicy.critic import make_critic
 from jugglerl.offpolicy.losses import LOSSES
-from jugglerl.offpolicy.losses.bc import behaviour_cloning_loss
+from jugglerl.offpolicy.losses.bc import add_cloning_term
 from jugglerl.offpolicy.losses.update import Update, check_rl_config
 
 
@@ -41,12 +41,10 @@ class DDPG(Update):
             # the two halves of DDPGLoss.forward, without packing them into a TensorDict
             loss_critic, critic_info = self.loss.loss_value(batch)
             loss_actor, _ = self.loss.loss_actor(batch)
-            total = loss_actor + loss_critic
             losses = {}
-            if self.bc_weight > 0:
-                loss_bc = behaviour_cloning_loss(self.loss.actor_network, batch)
-                total = total + self.bc_weight * loss_bc
-                losses["loss_bc"] = float(loss_bc.detach())
+            total = add_cloning_term(
+                loss_actor + loss_critic, self.loss.actor_network, batch, self.bc_weight, losses
+            )
         self.apply(total)
         return {
             "loss_actor": float(loss_actor.detach()),

@@ -14,7 +14,7 @@ from torchrl.objectives import TD3Loss, ValueEstimators
 
 from jugglerl.offpolicy.critic import make_critic
 from jugglerl.offpolicy.losses import LOSSES
-from jugglerl.offpolicy.losses.bc import behaviour_cloning_loss
+from jugglerl.offpolicy.losses.bc import add_cloning_term
 from jugglerl.offpolicy.losses.update import Update, check_rl_config
 
 
@@ -59,12 +59,10 @@ class TD3(Update):
             total = loss_critic
             if step_actor:
                 loss_actor, _ = self.loss.actor_loss(batch)
-                total = total + loss_actor
                 losses["loss_actor"] = float(loss_actor.detach())
-                if self.bc_weight > 0:
-                    loss_bc = behaviour_cloning_loss(self.loss.actor_network, batch)
-                    total = total + self.bc_weight * loss_bc
-                    losses["loss_bc"] = float(loss_bc.detach())
+                total = add_cloning_term(
+                    total + loss_actor, self.loss.actor_network, batch, self.bc_weight, losses
+                )
         self.apply(total, step_actor=step_actor)
         return {
             "loss_critic": float(loss_critic.detach()),
