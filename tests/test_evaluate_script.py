@@ -2,20 +2,12 @@
 
 import json
 import subprocess
-import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from cli import run_script
 
 
 def run_evaluate(*overrides: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "evaluate.py"), *overrides],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=300,
-    )
+    return run_script("evaluate.py", *overrides)
 
 
 def test_evaluate_writes_metrics_json_in_the_run_dir(tmp_path):

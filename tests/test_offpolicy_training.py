@@ -2,12 +2,10 @@
 evaluate.py on their run directories."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 import torch
-from cli import ROOT, interrupt_train, rrd_verifies, run_train, train_config
+from cli import interrupt_train, rrd_verifies, run_script, run_train, train_config
 
 from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy.training import OffPolicyTraining
@@ -149,17 +147,8 @@ def test_train_script_trains_td3_resumes_and_evaluate_runs_its_run_directory(tmp
     assert f"resuming {tmp_path} at frame 256" in resumed.stdout
     assert json.loads((tmp_path / "metrics.json").read_text())["frames"] == 384
 
-    evaluation = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "scripts" / "evaluate.py"),
-            f"policy={tmp_path}",
-            "duration=3",
-            f"hydra.run.dir={tmp_path / 'eval'}",
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
+    evaluation = run_script(
+        "evaluate.py", f"policy={tmp_path}", "duration=3", f"hydra.run.dir={tmp_path / 'eval'}"
     )
     assert evaluation.returncode == 0, evaluation.stderr
     metrics = json.loads((tmp_path / "eval" / "metrics.json").read_text())
