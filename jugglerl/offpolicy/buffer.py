@@ -25,14 +25,13 @@ class ReplayBuffer:
                 f" replay_buffer.slice_len={slice_len}"
             )
         self.slice_len = slice_len
+        self.batch_size = batch_size
         sampler = (
             RandomSampler()
             if slice_len is None
             else SliceSampler(slice_len=slice_len, traj_key=TRAJECTORY_KEY, strict_length=True)
         )
-        self._buffer = TensorDictReplayBuffer(
-            storage=LazyTensorStorage(size), sampler=sampler, batch_size=batch_size
-        )
+        self._buffer = TensorDictReplayBuffer(storage=LazyTensorStorage(size), sampler=sampler)
 
     @classmethod
     def from_config(cls, buffer_cfg: DictConfig, recurrent: bool) -> ReplayBuffer:
@@ -46,6 +45,9 @@ class ReplayBuffer:
         """Store a collector batch ``[envs, time]``, each env's steps kept consecutive."""
         self._buffer.extend(batch.reshape(-1))
 
-    def sample(self) -> TensorDictBase:
-        batch = self._buffer.sample()
+    def sample(self, fraction: float = 1.0) -> TensorDictBase:
+        """``fraction`` of a batch (rounded to whole sub-trajectories, at least one)."""
+        unit = self.slice_len or 1
+        count = max(1, round(self.batch_size * fraction / unit)) * unit
+        batch = self._buffer.sample(count)
         return batch if self.slice_len is None else batch.reshape(-1, self.slice_len)

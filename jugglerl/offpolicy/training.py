@@ -44,6 +44,7 @@ from jugglerl.offpolicy.env_stack import (
 from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.losses import LOSSES
+from jugglerl.offpolicy.stages import Stage, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
@@ -65,23 +66,31 @@ class OffPolicyTraining:
         torch.manual_seed(cfg.seed)
         norm = state["normalisation"] if state is not None else {"loc": None, "scale": None}
         self.env = make_env(cfg, cfg.collector.num_envs, norm["loc"], norm["scale"])
-        size = state_size(cfg.state)
-        self.actor = build_actor(cfg.actor, size, ACTION_SIZE)
+        self.actor = build_actor(cfg.actor, state_size(cfg.state), ACTION_SIZE)
         self.recurrent = bool(recurrent_state(cfg.actor))
-        self.update = LOSSES.get(cfg.algo.loss)(
-            self.actor, size, self.env.action_spec, cfg, self.recurrent
-        )
-        self.noise = make_exploration(cfg.exploration, self.env.action_spec)
-        self.policy = TensorDictSequential(*self._teacher(), self.actor, self.noise)
+        self.teacher = self._teacher()
+        self.stages = stages_from_config(cfg)
         self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
+        self.demonstrations = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
         self.evaluations = Evaluations(cfg)
         self.frames = 0
         self.updates = 0
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
         self.history: list[dict] = []  # one record per collected batch
         self.recording_id: str | None = None
+        # a checkpoint holds the loss and exploration of the stage it was saved in
+        self._enter(self.stages[state.get("stage", 0)] if state else self.stages[0])
         if state is not None:
             self.load_state_dict(state)
+
+    def _enter(self, stage: Stage) -> None:
+        """Build ``stage``'s loss (on the same actor) and exploration, and the acting policy."""
+        self.stage = stage
+        self.update = LOSSES.get(stage.cfg.algo.loss)(
+            self.actor, state_size(self.cfg.state), self.env.action_spec, stage.cfg, self.recurrent
+        )
+        self.noise = make_exploration(stage.cfg.exploration, self.env.action_spec)
+        self.policy = TensorDictSequential(*self.teacher, self.actor, self.noise)
 
     def _teacher(self) -> list[TeacherModule]:
         """The teacher acting in the loop, when ``teacher.policy`` names one."""
@@ -99,11 +108,7 @@ class OffPolicyTraining:
         logger.send_blueprint(training_blueprint(OFFPOLICY_CURVES))
         collect = self.cfg.collector
         bar = tqdm(
-            total=collect.total_frames,
-            initial=self.frames,
-            desc=f"{self.cfg.algo.name.upper()} {self.cfg.actor.name}",
-            unit="frame",
-            disable=not progress,
+            total=collect.total_frames, initial=self.frames, unit="frame", disable=not progress
         )
         started = time.monotonic()
         try:
@@ -135,21 +140,29 @@ class OffPolicyTraining:
         return metrics
 
     def _train(self, logger: RerunLogger, bar: tqdm) -> None:
+        """Each stage from the current one, each collected to its end."""
+        for stage in self.stages[self.stage.index :]:
+            if stage is not self.stage:
+                self._enter(stage)
+            if self.frames < stage.end:
+                self._train_stage(logger, bar)
+
+    def _train_stage(self, logger: RerunLogger, bar: tqdm) -> None:
         collect = self.cfg.collector
-        remaining = collect.total_frames - self.frames
-        if remaining <= 0:
-            return
+        bar.set_description(f"{self.stage.name.upper()} {self.cfg.actor.name}")
         self.env.set_seed(self.cfg.seed + self.frames)  # a resumed run meets new episodes
         collector = Collector(
             self.env,
             self.policy,
             frames_per_batch=collect.frames_per_batch,
-            total_frames=remaining,
+            total_frames=self.stage.end - self.frames,
             init_random_frames=max(0, collect.init_random_frames - self.frames),
         )
         try:
             for batch in collector:
                 self.buffer.extend(batch)
+                if self.stage.demonstrations:
+                    self.demonstrations.extend(batch)
                 self.frames += batch.numel()
                 self.noise.step(batch.numel())
                 record = self._learn() | self._episode_stats(batch)
@@ -175,16 +188,28 @@ class OffPolicyTraining:
         )
         if not ready:
             return {}
-        losses = [
-            self.update(self.buffer.sample()) for _ in range(self.cfg.optim.updates_per_batch)
-        ]
+        self.update.bc_weight = self.stage.bc_weight_at(self.frames)
+        self.update.actor_frozen = self.stage.actor_frozen(self.frames)
+        losses = [self.update(self._sample()) for _ in range(self.cfg.optim.updates_per_batch)]
         self.updates += len(losses)
         keys = dict.fromkeys(key for loss in losses for key in loss)
         return {key: float(np.mean([loss[key] for loss in losses if key in loss])) for key in keys}
 
+    def _sample(self):
+        """A batch from the replay buffer, ``demo_fraction`` of it from the demonstrations."""
+        fraction = self.stage.demo_fraction
+        if fraction == 0 or len(self.demonstrations) == 0:
+            return self.buffer.sample()
+        demos = self.demonstrations.sample(fraction)
+        return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
+
     def _episode_stats(self, batch) -> dict:
         """Mean reward per step, and the return, throws, catches and length of finished episodes."""
-        stats = {"frames": self.frames, "reward": float(batch["next", "reward"].mean())}
+        stats = {
+            "frames": self.frames,
+            "stage": self.stage.index,
+            "reward": float(batch["next", "reward"].mean()),
+        }
         done = batch["next", "done"].squeeze(-1)
         if done.any():
             finished = batch["next"][done]
@@ -243,6 +268,7 @@ class OffPolicyTraining:
             "policy": self.deployed_actor().state_dict(),
             "update": self.update.state_dict(),
             "normalisation": {"loc": norm.loc.clone(), "scale": norm.scale.clone()},
+            "stage": self.stage.index,
             "exploration": self.noise.state_dict(),
             "rng": {"torch": torch.get_rng_state(), "numpy": np.random.get_state()},
             "counters": {

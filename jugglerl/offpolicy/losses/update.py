@@ -70,6 +70,8 @@ class Update:
             )
         )
         self.targets = None if tau is None else FlatSoftUpdate(loss, tau=tau)
+        self.bc_weight = 0.0  # the RL losses' cloning weight; a stage may anneal it
+        self.actor_frozen = False  # a stage's critic warm-up: only the critics step
         self.max_grad_norm = optim_cfg.max_grad_norm
         self.clipped_groups = [
             [p for group in optimiser.param_groups for p in group["params"]]
@@ -82,13 +84,14 @@ class Update:
 
     def apply(self, total: torch.Tensor, step_actor: bool = True) -> None:
         """Back-propagate ``total``, clip, step the optimisers (the actor's only when
-        ``step_actor``) and, after an actor step, the targets."""
+        ``step_actor`` and not ``actor_frozen``) and, after an actor step, the targets."""
         for optimiser in self.optimisers:
             optimiser.zero_grad()
         total.backward()
         if self.max_grad_norm is not None:
             for params in self.clipped_groups:
                 torch.nn.utils.clip_grad_norm_(params, self.max_grad_norm)
+        step_actor = step_actor and not self.actor_frozen
         if step_actor:
             self.actor_optimiser.step()
         if self.critic_optimiser is not None:

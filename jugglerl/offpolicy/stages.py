@@ -1,0 +1,118 @@
+"""Stages of an off-policy run: what acts, what learns and from what, frame range by frame range.
+
+Learning from a teacher goes through stages (``configs/algo/apprentice.yaml``): behaviour cloning
+while the teacher acts, DAgger while the student acts and the teacher labels what it visits,
+then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
+
+| key | meaning |
+| --- | --- |
+| ``name`` | shown on the progress bar and in the history |
+| ``until`` | frame count at which the stage ends (the last: ``collector.total_frames``, which
+  also cuts a stage short or leaves the later ones for a resume to reach) |
+| ``loss`` | the ``algo.loss`` the stage updates with (``bc``, ``ddpg``, ``td3``) |
+| ``exploration`` | exploration keys replaced in this stage (e.g. the teacher's weight) |
+| ``bc_weight``, ``bc_weight_end`` | the RL losses' cloning weight, linear over the stage |
+| ``demonstrations`` | the stage's frames are kept as demonstrations too (a buffer of their own) |
+| ``demo_fraction`` | fraction of each sampled batch drawn from the demonstrations |
+| ``warmup_frames`` | the actor stays still for the stage's first frames (its critic learns first) |
+
+Without ``algo.stages`` a run is one stage made of ``algo.loss`` and the exploration group.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from omegaconf import DictConfig, OmegaConf
+
+STAGE_KEYS = {
+    "name",
+    "until",
+    "loss",
+    "exploration",
+    "bc_weight",
+    "bc_weight_end",
+    "demonstrations",
+    "demo_fraction",
+    "warmup_frames",
+}
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One stage: frames ``[start, end)``, and the config its loss and exploration are built
+    from (``cfg`` with the stage's loss, cloning weight and exploration keys in place)."""
+
+    index: int
+    name: str
+    start: int
+    end: int
+    cfg: DictConfig
+    bc_weight: tuple[float, float]
+    demonstrations: bool
+    demo_fraction: float
+    warmup_frames: int
+
+    def bc_weight_at(self, frames: int) -> float:
+        """The cloning weight after ``frames`` frames of the run."""
+        progress = min(1.0, max(0.0, (frames - self.start) / max(1, self.end - self.start)))
+        start, end = self.bc_weight
+        return start + (end - start) * progress
+
+    def actor_frozen(self, frames: int) -> bool:
+        """Whether the updates made once ``frames`` frames are collected leave the actor still."""
+        return self.warmup_frames > 0 and frames <= self.start + self.warmup_frames
+
+
+def stages_from_config(cfg: DictConfig) -> list[Stage]:
+    """The run's stages (module docstring); bad stage settings raise ``ValueError`` naming them."""
+    total = cfg.collector.total_frames
+    specs = cfg.algo.get("stages")
+    if not specs:
+        specs = [{"name": cfg.algo.name, "loss": cfg.algo.loss}]
+    stages, start = [], 0
+    for index, spec in enumerate(specs):
+        where = f"algo.stages[{index}]"
+        unknown = set(spec) - STAGE_KEYS
+        if unknown:
+            raise ValueError(
+                f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(STAGE_KEYS)}"
+            )
+        if start >= total:  # a shorter run ends before this stage (a resume may reach it)
+            break
+        last = index == len(specs) - 1
+        end = total if last else spec.get("until")
+        if end is None or end <= start:
+            raise ValueError(
+                f"{where}.until={end} must be above the previous stage's end ({start})"
+            )
+        end = min(end, total)
+        stage_cfg = cfg.copy()
+        OmegaConf.set_struct(stage_cfg, False)
+        stage_cfg.algo.loss = spec.get("loss", cfg.algo.loss)
+        bc_weight = float(spec.get("bc_weight", cfg.algo.get("bc_weight", 0.0)))
+        stage_cfg.algo.bc_weight = bc_weight
+        stage_cfg.exploration = OmegaConf.merge(cfg.exploration, spec.get("exploration", {}))
+        fraction = float(spec.get("demo_fraction", 0.0))
+        if not 0 <= fraction < 1:
+            raise ValueError(f"{where}.demo_fraction={fraction} must be in [0, 1)")
+        stages.append(
+            Stage(
+                index=index,
+                name=str(spec.get("name", f"stage {index}")),
+                start=start,
+                end=int(end),
+                cfg=stage_cfg,
+                bc_weight=(bc_weight, float(spec.get("bc_weight_end", bc_weight))),
+                demonstrations=bool(spec.get("demonstrations", False)),
+                demo_fraction=fraction,
+                warmup_frames=int(spec.get("warmup_frames", 0)),
+            )
+        )
+        start = int(end)
+    if any(stage.demo_fraction for stage in stages) and not any(
+        stage.demonstrations for stage in stages
+    ):
+        raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
+    return stages
+

@@ -1,0 +1,107 @@
+"""Staged off-policy runs (algo=apprentice): BC while the teacher acts, DAgger while the student
+acts, RL from the cloned actor; each stage's settings, and a run that resumes in any stage."""
+
+import re
+
+import pytest
+import torch
+from cli import train_config
+from tensordict import TensorDict
+from test_offpolicy_training import TINY, train
+
+from jugglerl.checkpoints import load_checkpoint
+from jugglerl.offpolicy.stages import stages_from_config
+from jugglerl.offpolicy.teacher import TEACHER_ACTION
+from jugglerl.offpolicy.training import OffPolicyTraining
+
+#: Three stages of 128 frames each, the critic warming up over the RL stage's first batch.
+STAGED = [
+    *TINY,
+    "algo=apprentice",
+    "collector.total_frames=384",
+    "algo.stages.0.until=128",
+    "algo.stages.1.until=256",
+    "algo.stages.2.warmup_frames=128",
+    "eval.every_frames=0",
+]
+
+
+def test_the_apprentice_stages_clone_then_dagger_then_rl():
+    bc, dagger, rl = stages_from_config(train_config("algo=apprentice"))
+    assert [s.name for s in (bc, dagger, rl)] == ["bc", "dagger", "rl"]
+    assert (bc.start, bc.end, dagger.end, rl.end) == (0, 40960, 102400, 163840)
+    assert bc.cfg.algo.loss == dagger.cfg.algo.loss == "bc" and rl.cfg.algo.loss == "ddpg"
+    assert bc.cfg.exploration.centre == "teacher" and bc.cfg.exploration.expert_weight_init == 1
+    assert dagger.cfg.exploration.expert_weight_init == 0 and dagger.cfg.exploration.sigma_init == 0
+    assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0.25
+    assert rl.cfg.algo.bc_weight == 1.0 and rl.bc_weight_at(rl.end) == pytest.approx(0.1)
+    assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(0.55)
+    assert rl.actor_frozen(rl.start + 10240) and not rl.actor_frozen(rl.start + 10241)
+    assert (
+        stages_from_config(train_config("algo=apprentice", "algo.loss=td3"))[2].cfg.algo.loss
+        == "td3"
+    )
+    short = stages_from_config(train_config("algo=apprentice", "collector.total_frames=50000"))
+    assert [(s.name, s.end) for s in short] == [("bc", 40960), ("dagger", 50000)]
+
+
+def test_a_run_without_stages_is_one_stage_of_its_loss():
+    (stage,) = stages_from_config(train_config("algo=td3"))
+    assert (stage.name, stage.start, stage.end, stage.cfg.algo.loss) == ("td3", 0, 307200, "td3")
+    assert not stage.actor_frozen(1024) and stage.demo_fraction == 0
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("algo.stages.1.until=100", "algo.stages[1].until=100 must be above"),
+        ("+algo.stages.0.epochs=3", "algo.stages[0]: unknown keys ['epochs']"),
+        ("algo.stages.2.demo_fraction=1", "algo.stages[2].demo_fraction=1.0 must be in [0, 1)"),
+        ("algo.stages.0.demonstrations=false", "a demo_fraction needs a stage with demonstrations"),
+    ],
+)
+def test_bad_stage_settings_are_named(override, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        stages_from_config(train_config("algo=apprentice", override))
+
+
+def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_stage(tmp_path):
+    cfg = train_config(*STAGED)
+    cfg.collector.total_frames = 256  # stop after the DAgger stage
+    metrics, training = train(cfg, tmp_path / "run")
+    assert [h["stage"] for h in metrics["history"]] == [0, 1]
+    data = training.buffer._buffer[:]  # the frames of both stages, in order
+    bc_frames, dagger_frames = data[:128], data[128:256]
+    # BC: the teacher acts (white noise of σ = 0.003 around it); DAgger: the actor acts
+    assert (bc_frames["action"] - bc_frames[TEACHER_ACTION]).std() == pytest.approx(0.003, rel=0.2)
+    assert not torch.allclose(dagger_frames["action"], dagger_frames[TEACHER_ACTION], atol=1e-3)
+    assert len(training.demonstrations) == 128  # only the BC stage's frames
+    state = load_checkpoint(tmp_path / "run")
+    assert state["counters"]["frames"] == 256
+
+    cfg.collector.total_frames = 384
+    resumed = OffPolicyTraining(cfg, tmp_path / "run", state)
+    assert resumed.stage.name == "dagger"  # where it was saved; the run moves on from there
+    actor = {k: v.clone() for k, v in resumed.actor.state_dict().items()}
+    for key, value in training.actor.state_dict().items():  # the cloned actor carries over
+        torch.testing.assert_close(actor[key], value)
+    resumed.close()
+    metrics, again = train(cfg, tmp_path / "run", state)
+    assert [h["stage"] for h in metrics["history"]] == [0, 1, 2]
+    assert again.stage.name == "rl" and type(again.update).__name__ == "DDPG"
+    assert "loss_critic" in metrics["history"][-1] and "loss_bc" in metrics["history"][-1]
+    for key, value in again.actor.state_dict().items():  # the warm-up kept the actor still
+        torch.testing.assert_close(value, actor[key])
+    again.close()
+
+
+def test_the_rl_stage_samples_its_demo_fraction_from_the_demonstrations(tmp_path):
+    cfg = train_config(*STAGED)
+    training = OffPolicyTraining(cfg, tmp_path)
+    training._enter(training.stages[2])
+    marked = torch.arange(256).unsqueeze(-1)
+    training.buffer.extend(TensorDict({"mark": marked}, [256]))
+    training.demonstrations.extend(TensorDict({"mark": -1 - marked}, [256]))
+    batch = training._sample()
+    assert batch.shape == (64,) and int((batch["mark"] < 0).sum()) == 16  # 0.25 of 64
+    training.close()
