@@ -12,10 +12,10 @@ from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
 
 
-def test_it_starts_at_the_shipped_closed_loop_and_decodes_back_to_it():
+def test_it_starts_at_its_start_policy_and_decodes_back_to_it():
     space = CommandAndGainSpace(train_config("algo=closed_loop"))
     command, gains = space.decode(space.start)
-    shipped = load_policy("closed_loop", JuggleEnv())
+    shipped = load_policy("closed_loop_gains", JuggleEnv())
     assert command == shipped.command and gains == shipped.gains
     assert len(space.start) == len(space.stds) == 10 + 6
 

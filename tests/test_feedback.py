@@ -200,10 +200,14 @@ def test_every_shipped_policy_keeps_its_throws_honest():
         assert metrics.max_cup_height <= 0.76 and metrics.throws >= 39, name
 
 
-def test_the_tolerant_closed_loop_keeps_its_throws_under_action_noise():
+def test_each_joint_search_kept_more_throws_under_action_noise():
     env = JuggleEnv(action_noise=0.003)
-    tolerant, shipped = load_policy("closed_loop_tolerant", env), load_policy("closed_loop", env)
-    tolerant_throws = [run_episode(env, tolerant, seed).throws for seed in (0, 1)]
-    shipped_throws = [run_episode(env, shipped, seed).throws for seed in (0, 1)]
-    assert sum(tolerant_throws) > sum(shipped_throws)
-    assert run_episode(JuggleEnv(), tolerant, seed=0).throws >= 55
+    names = ("closed_loop_gains", "closed_loop_tolerant", "closed_loop")
+    noisy = [
+        sum(run_episode(env, load_policy(n, env), seed).throws for seed in (0, 1)) for n in names
+    ]
+    assert noisy[0] < noisy[1] < noisy[2]
+    nominal = run_episode(JuggleEnv(), load_policy("closed_loop", env), seed=0).throws
+    assert (
+        nominal >= 55 and noisy[2] >= 0.9 * 2 * nominal
+    )  # the teacher's bar: 90 % under σ = 0.003

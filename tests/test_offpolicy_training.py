@@ -6,6 +6,7 @@ import json
 import pytest
 import torch
 from cli import interrupt_train, rrd_verifies, run_script, run_train, train_config
+from tensordict import TensorDict
 
 from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy.training import OffPolicyTraining
@@ -190,3 +191,22 @@ def test_a_bad_group_choice_lists_the_valid_ones(tmp_path):
     result = run_train("actor=gru", f"hydra.run.dir={tmp_path}")
     assert "Available options in 'actor'" in result.stderr
     assert "lstm" in result.stderr and "mlp" in result.stderr
+
+
+def test_the_throw_rate_counts_the_throws_made_within_the_batch(tmp_path):
+    training = OffPolicyTraining(train_config(*TINY), tmp_path)
+    throws = torch.tensor([[0, 0, 1, 1], [3, 3, 3, 0]])  # the second env restarts at its last step
+    batch = TensorDict(
+        {
+            "throws": throws,
+            "next": {
+                "throws": torch.tensor([[0, 1, 1, 2], [3, 3, 4, 0]]),
+                "reward": torch.zeros(2, 4, 1),
+                "done": torch.zeros(2, 4, 1, dtype=torch.bool),
+            },
+        },
+        [2, 4],
+    )
+    minutes = 8 * training.cfg.env.timestep * training.cfg.env.frame_skip / 60
+    assert training._episode_stats(batch)["throws_per_minute"] == pytest.approx(3 / minutes)
+    training.close()

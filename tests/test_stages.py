@@ -34,8 +34,9 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert bc.cfg.exploration.centre == "teacher" and bc.cfg.exploration.expert_weight_init == 1
     assert dagger.cfg.exploration.expert_weight_init == 0 and dagger.cfg.exploration.sigma_init == 0
     assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0.25
-    assert rl.cfg.algo.bc_weight == 1.0 and rl.bc_weight_at(rl.end) == pytest.approx(0.1)
-    assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(0.55)
+    assert rl.cfg.algo.bc_weight == 100.0 and rl.bc_weight_at(rl.end) == pytest.approx(10.0)
+    assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(55.0)
+    assert bc.cfg.optim.lr_actor == 1e-3 and rl.cfg.optim.lr_actor == 1e-4
     assert rl.actor_frozen(rl.start + 10240) and not rl.actor_frozen(rl.start + 10241)
     assert (
         stages_from_config(train_config("algo=apprentice", "algo.loss=td3"))[2].cfg.algo.loss

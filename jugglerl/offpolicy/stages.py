@@ -10,7 +10,8 @@ then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
 | ``until`` | frame count at which the stage ends (the last: ``collector.total_frames``, which
   also cuts a stage short or leaves the later ones for a resume to reach) |
 | ``loss`` | the ``algo.loss`` the stage updates with (``bc``, ``ddpg``, ``td3``) |
-| ``exploration`` | exploration keys replaced in this stage (e.g. the teacher's weight) |
+| ``exploration``, ``optim`` | keys of those groups replaced in this stage (the teacher's weight,
+  a learning rate) |
 | ``bc_weight``, ``bc_weight_end`` | the RL losses' cloning weight, linear over the stage |
 | ``demonstrations`` | the stage's frames are kept as demonstrations too (a buffer of their own) |
 | ``demo_fraction`` | fraction of each sampled batch drawn from the demonstrations |
@@ -30,6 +31,7 @@ STAGE_KEYS = {
     "until",
     "loss",
     "exploration",
+    "optim",
     "bc_weight",
     "bc_weight_end",
     "demonstrations",
@@ -41,7 +43,7 @@ STAGE_KEYS = {
 @dataclass(frozen=True)
 class Stage:
     """One stage: frames ``[start, end)``, and the config its loss and exploration are built
-    from (``cfg`` with the stage's loss, cloning weight and exploration keys in place)."""
+    from (``cfg`` with the stage's loss, cloning weight, exploration and optim keys in place)."""
 
     index: int
     name: str
@@ -92,7 +94,8 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage_cfg.algo.loss = spec.get("loss", cfg.algo.loss)
         bc_weight = float(spec.get("bc_weight", cfg.algo.get("bc_weight", 0.0)))
         stage_cfg.algo.bc_weight = bc_weight
-        stage_cfg.exploration = OmegaConf.merge(cfg.exploration, spec.get("exploration", {}))
+        for group in ("exploration", "optim"):
+            stage_cfg[group] = OmegaConf.merge(cfg[group], spec.get(group, {}))
         fraction = float(spec.get("demo_fraction", 0.0))
         if not 0 <= fraction < 1:
             raise ValueError(f"{where}.demo_fraction={fraction} must be in [0, 1)")
@@ -115,4 +118,3 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
     ):
         raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
     return stages
-

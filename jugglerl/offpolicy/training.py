@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +54,10 @@ from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
 
 METRICS = "metrics.json"
+#: Batches the throw rate is measured over.
+THROW_WINDOW = 10
+#: The history entries the progress bar shows.
+POSTFIX = ("throws_per_minute", "return", "throws")
 
 
 class OffPolicyTraining:
@@ -77,6 +82,7 @@ class OffPolicyTraining:
         self.updates = 0
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
         self.history: list[dict] = []  # one record per collected batch
+        self.recent_throws: deque = deque(maxlen=THROW_WINDOW)  # (throws, minutes) per batch
         self.recording_id: str | None = None
         # a checkpoint holds the loss and exploration of the stage it was saved in
         self._enter(self.stages[state.get("stage", 0)] if state else self.stages[0])
@@ -168,9 +174,7 @@ class OffPolicyTraining:
                 record = self._learn() | self._episode_stats(batch)
                 self.history.append(record)
                 logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
-                bar.set_postfix(
-                    {k: f"{record[k]:.3g}" for k in ("return", "throws") if k in record}
-                )
+                bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
                 bar.update(batch.numel())
                 if _crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
                     record = self.evaluate(logger, self.cfg.eval.duration)
@@ -181,7 +185,8 @@ class OffPolicyTraining:
             collector.shutdown(close_env=False)
 
     def _learn(self) -> dict:
-        """``optim.updates_per_batch`` updates once the buffer holds a batch; mean losses."""
+        """The stage's ``optim.updates_per_batch`` updates once the buffer holds a batch; mean
+        losses."""
         ready = (
             self.frames >= self.cfg.collector.init_random_frames
             and len(self.buffer) >= self.cfg.replay_buffer.batch_size
@@ -190,7 +195,8 @@ class OffPolicyTraining:
             return {}
         self.update.bc_weight = self.stage.bc_weight_at(self.frames)
         self.update.actor_frozen = self.stage.actor_frozen(self.frames)
-        losses = [self.update(self._sample()) for _ in range(self.cfg.optim.updates_per_batch)]
+        updates = self.stage.cfg.optim.updates_per_batch
+        losses = [self.update(self._sample()) for _ in range(updates)]
         self.updates += len(losses)
         keys = dict.fromkeys(key for loss in losses for key in loss)
         return {key: float(np.mean([loss[key] for loss in losses if key in loss])) for key in keys}
@@ -204,11 +210,19 @@ class OffPolicyTraining:
         return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
 
     def _episode_stats(self, batch) -> dict:
-        """Mean reward per step, and the return, throws, catches and length of finished episodes."""
+        """Mean reward per step; throws per minute of simulated time over the last
+        ``THROW_WINDOW`` batches (seen long before any episode ends; one batch alone is bursty,
+        as the envs start together and throw at the same moments); and the return, throws,
+        catches and length of the episodes that finished."""
+        thrown = float((batch["next", "throws"] - batch["throws"]).clamp(min=0).sum())
+        minutes = batch.numel() * self.cfg.env.timestep * self.cfg.env.frame_skip / 60
+        self.recent_throws.append((thrown, minutes))
         stats = {
             "frames": self.frames,
             "stage": self.stage.index,
             "reward": float(batch["next", "reward"].mean()),
+            "throws_per_minute": sum(t for t, _ in self.recent_throws)
+            / sum(m for _, m in self.recent_throws),
         }
         done = batch["next", "done"].squeeze(-1)
         if done.any():

@@ -18,8 +18,9 @@ centimetre off-centre hits the cone's wall. ``FeedbackPolicy`` closes both loops
 The four gains and the aim point ``(bias_x, bias_y)`` form the parameter vector ``θ`` that
 ``algo=feedback`` (the search space ``jugglerl.dps.spaces.feedback_gains``) searches; this module
 needs no torch. A policy file is YAML of ``kind: feedback``: ``name``, ``command`` (a command
-mapping) and ``feedback`` (the gains by name); ``assets/policies/closed_loop.yaml`` ships the
-trained one as ``policy=closed_loop``.
+mapping) and ``feedback`` (the gains by name). Shipped: ``closed_loop_gains`` (gains searched for
+``dps_best``), ``closed_loop_tolerant`` and ``closed_loop`` (command and gains searched together,
+``algo=closed_loop``, under growing imprecision).
 """
 
 from __future__ import annotations

@@ -75,6 +75,7 @@ class Curve:
 #: frames): DDPG, TD3 and behaviour cloning.
 OFFPOLICY_CURVES = (
     Curve("throws per episode", (f"{TRAIN}/throws", f"{EVAL}/mean_throws")),
+    Curve("throws per minute (training)", (f"{TRAIN}/throws_per_minute",), legend=None),
     Curve("catches per episode", (f"{TRAIN}/catches", f"{EVAL}/mean_catches")),
     Curve("time up per episode (s)", (f"{TRAIN}/episode_seconds", f"{EVAL}/mean_time_to_drop")),
     Curve("catch rate (evaluation)", (f"{EVAL}/catch_rate",), legend=None, y_range=FRACTION),
