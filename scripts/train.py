@@ -1,9 +1,11 @@
 """Train a juggling policy; everything lands in the run directory.
 
-python scripts/train.py                                       # DDPG: MLP actor, expert noise
-python scripts/train.py actor=lstm reward=contacts            # LSTM actor, the paper's reward 3
+python scripts/train.py                                       # BC, DAgger, DDPG from closed_loop
+python scripts/train.py actor=lstm                            # the same with the LSTM actor
+python scripts/train.py algo=ddpg actor=lstm reward=contacts  # DDPG alone, the paper's reward 3
 python scripts/train.py algo=td3 actor=lstm                   # TD3 (twin critics, delayed actor)
 python scripts/train.py algo=bc teacher.policy=closed_loop    # behaviour cloning of a teacher
+python scripts/train.py algo.loss=td3 teacher.policy=closed_loop_tolerant  # TD3 in the RL stage
 python scripts/train.py algo=dps                              # eREPS from the expert, 500 roll-outs
 python scripts/train.py algo=feedback                         # closed loop: eREPS over its gains
 python scripts/train.py resume=outputs/train/<algo>/<run>     # continue from its checkpoint

@@ -13,7 +13,7 @@ from jugglerl.offpolicy.env_stack import make_env, state_size
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.losses.bc import TEACHER_ACTION
 
-SMALL = ["env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]
+SMALL = ["algo=ddpg", "env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]
 
 
 def transitions(*overrides: str):

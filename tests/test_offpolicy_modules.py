@@ -23,7 +23,7 @@ from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
-SMALL = ["env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]
+SMALL = ["algo=ddpg", "env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]
 
 
 def stack(*overrides: str):

@@ -9,6 +9,7 @@ from cli import interrupt_train, rrd_verifies, run_script, run_train, train_conf
 from tensordict import TensorDict
 
 from jugglerl.checkpoints import load_checkpoint
+from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.recording.logger import RerunLogger
@@ -16,6 +17,7 @@ from jugglerl.recording.reading import column
 
 #: A few hundred frames: 2 envs x 64 steps per batch, short episodes and evaluations.
 TINY = [
+    "algo=ddpg",
     "env.duration=4",
     "state.norm_frames=200",
     "collector.num_envs=2",
@@ -178,6 +180,10 @@ def test_ctrl_c_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
         ("algo=td3 algo.policy_delay=0", "error: algo.policy_delay=0 must be >= 1"),
         ("algo.loss=sac", "error: algo.loss='sac' is not available; choose one of bc, ddpg, td3"),
         ("actor=lstm replay_buffer.batch_size=50", "error: replay_buffer.batch_size=50 must be a"),
+        (
+            "actor=lstm replay_buffer.slice_len=128",
+            "error: replay_buffer.slice_len=128 must be at most",
+        ),
     ],
 )
 def test_a_bad_override_gives_a_clear_message(tmp_path, override, message):
@@ -193,20 +199,17 @@ def test_a_bad_group_choice_lists_the_valid_ones(tmp_path):
     assert "lstm" in result.stderr and "mlp" in result.stderr
 
 
-def test_the_throw_rate_counts_the_throws_made_within_the_batch(tmp_path):
-    training = OffPolicyTraining(train_config(*TINY), tmp_path)
+def test_the_throw_rate_counts_the_throws_made_within_the_last_batches():
+    stats = BatchStats(step_seconds=0.02, window=2)
     throws = torch.tensor([[0, 0, 1, 1], [3, 3, 3, 0]])  # the second env restarts at its last step
-    batch = TensorDict(
-        {
-            "throws": throws,
-            "next": {
-                "throws": torch.tensor([[0, 1, 1, 2], [3, 3, 4, 0]]),
-                "reward": torch.zeros(2, 4, 1),
-                "done": torch.zeros(2, 4, 1, dtype=torch.bool),
-            },
-        },
-        [2, 4],
-    )
-    minutes = 8 * training.cfg.env.timestep * training.cfg.env.frame_skip / 60
-    assert training._episode_stats(batch)["throws_per_minute"] == pytest.approx(3 / minutes)
-    training.close()
+    following = torch.tensor([[0, 1, 1, 2], [3, 3, 4, 0]])
+
+    def batch(throws, following):
+        rest = {"reward": torch.zeros(2, 4, 1), "done": torch.zeros(2, 4, 1, dtype=torch.bool)}
+        return TensorDict({"throws": throws, "next": {"throws": following, **rest}}, [2, 4])
+
+    minutes = 8 * 0.02 / 60
+    assert stats(batch(throws, following))["throws_per_minute"] == pytest.approx(3 / minutes)
+    none = batch(following, following)  # a batch without a throw halves the rate over two
+    assert stats(none)["throws_per_minute"] == pytest.approx(3 / (2 * minutes))
+    assert stats(none)["throws_per_minute"] == 0  # the first batch has left the window

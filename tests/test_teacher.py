@@ -13,7 +13,7 @@ from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
 
 #: 2 envs whose 2 s episodes end and restart inside a 250-step roll-out.
-SMALL = ["env.duration=2", "state.norm_frames=200", "collector.num_envs=2"]
+SMALL = ["algo=ddpg", "env.duration=2", "state.norm_frames=200", "collector.num_envs=2"]
 
 
 def replayed_labels(policy, observations, times, starts) -> np.ndarray:
@@ -50,7 +50,9 @@ def test_the_teacher_labels_what_the_student_visits_as_the_plain_policy_would():
 
 
 def test_a_teacher_driving_the_batch_juggles_as_it_does_alone():
-    cfg = train_config("env.duration=10", "state.norm_frames=200", "collector.num_envs=2")
+    cfg = train_config(
+        "algo=ddpg", "env.duration=10", "state.norm_frames=200", "collector.num_envs=2"
+    )
     env = make_env(cfg, 2)
     teacher = TeacherModule(load_policy("closed_loop", JuggleEnv()), 2)
     follow = TensorDictModule(lambda action: action, [TEACHER_ACTION], ["action"])

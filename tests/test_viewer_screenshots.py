@@ -19,6 +19,7 @@ from jugglerl.recording.reading import entities
 #: About 7 s on 2 cores: two batches of 128 frames, episodes of 1 s, so that training episodes
 #: finish (return, throws) and two evaluations (each recorded) happen.
 SHORT_DDPG = [
+    "algo=ddpg",
     "collector.num_envs=2",
     "collector.frames_per_batch=128",
     "collector.total_frames=256",

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +33,9 @@ from tqdm import tqdm
 from jugglerl.checkpoints import CHECKPOINT, save_checkpoint
 from jugglerl.config import make_juggle_env
 from jugglerl.offpolicy.actors import build_actor, recurrent_state
+from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.buffer import ReplayBuffer
+from jugglerl.offpolicy.checks import check_config
 from jugglerl.offpolicy.env_stack import (
     ACTION_SIZE,
     make_env,
@@ -54,8 +55,6 @@ from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
 
 METRICS = "metrics.json"
-#: Batches the throw rate is measured over.
-THROW_WINDOW = 10
 #: The history entries the progress bar shows.
 POSTFIX = ("throws_per_minute", "return", "throws")
 
@@ -65,7 +64,7 @@ class OffPolicyTraining:
     ``load_checkpoint(path)`` to resume (it also supplies the observation normalisation)."""
 
     def __init__(self, cfg: DictConfig, run_dir: str | Path, state: dict | None = None):
-        _check(cfg)
+        check_config(cfg)
         self.cfg = cfg
         self.run_dir = Path(run_dir)
         torch.manual_seed(cfg.seed)
@@ -82,7 +81,7 @@ class OffPolicyTraining:
         self.updates = 0
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
         self.history: list[dict] = []  # one record per collected batch
-        self.recent_throws: deque = deque(maxlen=THROW_WINDOW)  # (throws, minutes) per batch
+        self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
         self.recording_id: str | None = None
         # a checkpoint holds the loss and exploration of the stage it was saved in
         self._enter(self.stages[state.get("stage", 0)] if state else self.stages[0])
@@ -171,7 +170,8 @@ class OffPolicyTraining:
                     self.demonstrations.extend(batch)
                 self.frames += batch.numel()
                 self.noise.step(batch.numel())
-                record = self._learn() | self._episode_stats(batch)
+                record = {"frames": self.frames, "stage": self.stage.index}
+                record |= self._learn() | self.batch_stats(batch)
                 self.history.append(record)
                 logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
                 bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
@@ -208,30 +208,6 @@ class OffPolicyTraining:
             return self.buffer.sample()
         demos = self.demonstrations.sample(fraction)
         return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
-
-    def _episode_stats(self, batch) -> dict:
-        """Mean reward per step; throws per minute of simulated time over the last
-        ``THROW_WINDOW`` batches (seen long before any episode ends; one batch alone is bursty,
-        as the envs start together and throw at the same moments); and the return, throws,
-        catches and length of the episodes that finished."""
-        thrown = float((batch["next", "throws"] - batch["throws"]).clamp(min=0).sum())
-        minutes = batch.numel() * self.cfg.env.timestep * self.cfg.env.frame_skip / 60
-        self.recent_throws.append((thrown, minutes))
-        stats = {
-            "frames": self.frames,
-            "stage": self.stage.index,
-            "reward": float(batch["next", "reward"].mean()),
-            "throws_per_minute": sum(t for t, _ in self.recent_throws)
-            / sum(m for _, m in self.recent_throws),
-        }
-        done = batch["next", "done"].squeeze(-1)
-        if done.any():
-            finished = batch["next"][done]
-            stats["return"] = float(finished["episode_reward"].mean())
-            stats["throws"] = float(finished["throws"].double().mean())
-            stats["catches"] = float(finished["catches"].double().mean())
-            stats["episode_seconds"] = float(finished["time"].double().mean())
-        return stats
 
     def position(self) -> str:
         return f"frame {self.frames}"
@@ -318,23 +294,3 @@ class OffPolicyTraining:
 def _crossed(frames: int, batch: int, every: int) -> bool:
     """True when the last ``batch`` frames passed a multiple of ``every``."""
     return every > 0 and frames // every > (frames - batch) // every
-
-
-def _check(cfg: DictConfig) -> None:
-    """Clear errors for budget settings that cannot work together."""
-    collect = cfg.collector
-    if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:
-        raise ValueError(
-            f"collector.frames_per_batch={collect.frames_per_batch} must be a multiple of"
-            f" collector.num_envs={collect.num_envs}"
-        )
-    if collect.total_frames < collect.frames_per_batch:
-        raise ValueError(
-            f"collector.total_frames={collect.total_frames} must be at least"
-            f" collector.frames_per_batch={collect.frames_per_batch}"
-        )
-    if cfg.eval.seeds < 1 or cfg.eval.duration < cfg.eval.catch_time:
-        raise ValueError(
-            f"eval.seeds={cfg.eval.seeds} must be >= 1 and eval.duration={cfg.eval.duration}"
-            f" at least eval.catch_time={cfg.eval.catch_time}"
-        )

@@ -76,6 +76,7 @@ class Curve:
 OFFPOLICY_CURVES = (
     Curve("throws per episode", (f"{TRAIN}/throws", f"{EVAL}/mean_throws")),
     Curve("throws per minute (training)", (f"{TRAIN}/throws_per_minute",), legend=None),
+    Curve("stage (index in algo.stages)", (f"{TRAIN}/stage",), legend=None),
     Curve("catches per episode", (f"{TRAIN}/catches", f"{EVAL}/mean_catches")),
     Curve("time up per episode (s)", (f"{TRAIN}/episode_seconds", f"{EVAL}/mean_time_to_drop")),
     Curve("catch rate (evaluation)", (f"{EVAL}/catch_rate",), legend=None, y_range=FRACTION),

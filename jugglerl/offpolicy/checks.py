@@ -1,0 +1,35 @@
+"""Clear one-line errors for off-policy settings that cannot work together."""
+
+from __future__ import annotations
+
+from omegaconf import DictConfig
+
+from jugglerl.offpolicy.actors import recurrent_state
+
+
+def check_config(cfg: DictConfig) -> None:
+    """Raise ``ValueError`` naming the keys of a budget or buffer that cannot work."""
+    collect = cfg.collector
+    if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:
+        raise ValueError(
+            f"collector.frames_per_batch={collect.frames_per_batch} must be a multiple of"
+            f" collector.num_envs={collect.num_envs}"
+        )
+    if collect.total_frames < collect.frames_per_batch:
+        raise ValueError(
+            f"collector.total_frames={collect.total_frames} must be at least"
+            f" collector.frames_per_batch={collect.frames_per_batch}"
+        )
+    steps = collect.frames_per_batch // collect.num_envs
+    if recurrent_state(cfg.actor) and cfg.replay_buffer.slice_len > steps:
+        # the buffer stores each batch env by env: a trajectory's steps are contiguous only
+        # within one batch, and sub-trajectories are sampled from contiguous runs
+        raise ValueError(
+            f"replay_buffer.slice_len={cfg.replay_buffer.slice_len} must be at most the steps"
+            f" per env in a batch, collector.frames_per_batch / collector.num_envs = {steps}"
+        )
+    if cfg.eval.seeds < 1 or cfg.eval.duration < cfg.eval.catch_time:
+        raise ValueError(
+            f"eval.seeds={cfg.eval.seeds} must be >= 1 and eval.duration={cfg.eval.duration}"
+            f" at least eval.catch_time={cfg.eval.catch_time}"
+        )
