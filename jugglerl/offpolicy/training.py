@@ -1,20 +1,23 @@
 """The off-policy trainer (``trainer: offpolicy``), read top to bottom: collect -> store ->
-update -> log -> evaluate -> checkpoint, with its loss a plug-in (``algo.loss``: ``ddpg``,
-``td3``, ``bc``; ``jugglerl.offpolicy.losses``).
+update -> log -> evaluate -> checkpoint, stage by stage (``algo.stages``,
+``jugglerl.offpolicy.stages``; one stage unless the algorithm lists several), each stage with its
+loss a plug-in (``algo.loss``: ``ddpg``, ``td3``, ``bc``; ``jugglerl.offpolicy.losses``).
 
-``OffPolicyTraining`` is built from the Hydra config (``configs/train.yaml``; ``algo=ddpg`` is
-the default) and a run directory, where it writes
+``OffPolicyTraining`` is built from the Hydra config (``configs/train.yaml``; ``algo=apprentice``
+is the default) and a run directory, where it writes
 
 - ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
-  the loss's networks, targets and optimisers, the normalisation, the exploration state, RNG
-  states, counters, history, config and the deployed actor (``policy``: what
-  ``scripts/evaluate.py policy=<run dir>`` runs); not the replay buffer (a resume refills it);
+  the stage, its loss's networks, targets and optimisers, the normalisation, the exploration
+  state, RNG states, counters, history, config and the deployed actor (``policy``: what
+  ``scripts/evaluate.py policy=<run dir>`` runs); not the replay buffers (a resume refills them);
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
 
 With ``teacher.policy`` set, a teacher acts in the loop beside the actor (``teacher``): its actions
-land in the replay buffer for behaviour cloning and centre exploration on it. Metrics go to rerun
-under ``train/`` (per batch) and ``eval/`` (each evaluation) on the ``step`` timeline (frames).
+land in the replay buffer for behaviour cloning and centre exploration on it; a stage with
+``demonstrations`` also keeps its frames apart, for the later stages' ``demo_fraction``. Metrics
+go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the ``step`` timeline
+(frames).
 """
 
 from __future__ import annotations
