@@ -168,7 +168,9 @@ def main() -> None:
     args, overrides = parser.parse_known_args()
     configs = Path(__file__).resolve().parents[1] / "configs"
     with initialize_config_dir(str(configs), version_base="1.3"):
-        cfg = compose("train", overrides=["actor=mlp", "exploration=gaussian", *overrides])
+        cfg = compose(
+            "train", overrides=["algo=ddpg", "actor=mlp", "exploration=gaussian", *overrides]
+        )
     torch.set_num_threads(1)  # the collector and the bare loop each run on one core
     with tempfile.TemporaryDirectory() as run_dir:  # the run writes nothing; it lends its parts
         training = OffPolicyTraining(cfg, run_dir)  # env stack, actor, exploration, update
