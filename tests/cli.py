@@ -5,7 +5,8 @@ forked from a server that has already imported torch, TorchRL, Hydra and the pac
 pays a fork (tens of ms) instead of those imports (about 4 s a script). The server has run no
 torch op, so its children start with fresh thread pools; each child gets its own ``sys.argv``,
 working directory, stdout and stderr files, and exits as the interpreter would (a ``sys.exit``
-message on stderr with code 1, an uncaught exception's traceback with code 1).
+message on stderr with code 1, an uncaught exception's traceback with code 1). It ends with
+``os._exit``, so ``atexit`` handlers do not run: the scripts close their files themselves.
 """
 
 from __future__ import annotations

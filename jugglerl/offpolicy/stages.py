@@ -22,6 +22,7 @@ Without ``algo.stages`` a run is one stage made of ``algo.loss`` and the explora
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
@@ -89,7 +90,7 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
                 f"{where}.until={end} must be above the previous stage's end ({start})"
             )
         end = min(end, total)
-        stage_cfg = cfg.copy()
+        stage_cfg = copy.deepcopy(cfg)
         OmegaConf.set_struct(stage_cfg, False)
         stage_cfg.algo.loss = spec.get("loss", cfg.algo.loss)
         bc_weight = float(spec.get("bc_weight", cfg.algo.get("bc_weight", 0.0)))
