@@ -3,9 +3,11 @@ acts, RL from the cloned actor; each stage's settings, and a run that resumes in
 
 import re
 
+import imageio.v3 as iio
+import numpy as np
 import pytest
 import torch
-from cli import train_config
+from cli import run_script, train_config
 from tensordict import TensorDict
 from test_offpolicy_training import TINY, train
 
@@ -106,3 +108,18 @@ def test_the_rl_stage_samples_its_demo_fraction_from_the_demonstrations(tmp_path
     batch = training._sample()
     assert batch.shape == (64,) and int((batch["mark"] < 0).sum()) == 16  # 0.25 of 64
     training.close()
+
+
+def test_plot_learning_draws_a_runs_evaluations_and_names_a_missing_run(tmp_path):
+    cfg = train_config(*STAGED, "eval.every_frames=128")
+    train(cfg, tmp_path / "run")
+    result = run_script("plot_learning.py", str(tmp_path / "run"), "--out", str(tmp_path / "c.png"))
+    assert result.returncode == 0, result.stderr
+    image = iio.imread(tmp_path / "c.png")
+    assert image.shape[1] > 1000 and len(np.unique(image.reshape(-1, image.shape[-1]), axis=0)) > 50
+    missing = run_script("plot_learning.py", str(tmp_path / "nowhere"))
+    assert missing.returncode == 1
+    assert (
+        missing.stderr.strip()
+        == f"error: no metrics.json in {tmp_path / 'nowhere'} (a finished off-policy run directory)"
+    )
