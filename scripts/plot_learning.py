@@ -5,24 +5,25 @@
 Reads each run's ``metrics.json`` (``evaluations``: ``eval.seeds`` episodes of ``eval.duration``
 every ``eval.every_frames``; the last record is the final full-length evaluation, left out here)
 and draws mean throws and mean time up against frames, one line per run labelled by its seed,
-with the stage boundaries of ``algo.stages`` dashed. Prints where it wrote the PNG.
+with the stage boundaries of ``algo.stages`` dashed. A folder may hold several runs (a multirun):
+every ``metrics.json`` below it is read (``jugglerl.run_tables.run_metrics``). Prints where it
+wrote the PNG.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 from itertools import pairwise
 from pathlib import Path
 
-from jugglerl.offpolicy.training import METRICS
+from jugglerl.run_tables import METRICS, run_metrics
 
 
-def read_run(folder: Path) -> dict:
-    path = folder / METRICS
-    if not path.is_file():
+def read_runs(folder: Path) -> list[dict]:
+    runs = run_metrics(folder)
+    if not runs:
         raise SystemExit(f"error: no {METRICS} in {folder} (a finished off-policy run directory)")
-    return json.loads(path.read_text())
+    return runs
 
 
 def stage_ends(run: dict) -> list[int]:
@@ -61,7 +62,7 @@ def main() -> None:
     parser.add_argument("runs", nargs="+", type=Path, help="run directories")
     parser.add_argument("--out", type=Path, default=Path("learning_curves.png"))
     args = parser.parse_args()
-    print(f"-> {plot([read_run(folder) for folder in args.runs], args.out)}")
+    print(f"-> {plot([run for folder in args.runs for run in read_runs(folder)], args.out)}")
 
 
 if __name__ == "__main__":
