@@ -1,20 +1,20 @@
-"""``EpisodePool``: episodes of closed-loop policies in worker processes, results in order.
+"""``EpisodePool``: episodes of closed-loop policies on a cluster's workers, results in order.
 
 A closed-loop episode steps Python every env step, so batches of them (the feedback search's
-roll-outs, the robustness benchmark) run one per process. A task names the env (keyword
-arguments of ``JuggleEnv``), the policy (a ``Policy`` object, pickled to the worker, or a
-``policy=`` spec that each worker loads once and keeps) and the reset seed.
+roll-outs, the robustness benchmark) run one per worker: processes of this machine, or Ray tasks
+(``jugglerl.cluster``). A task names the env (keyword arguments of ``JuggleEnv``), the policy (a
+``Policy`` object, pickled to the worker, or a ``policy=`` spec that each worker loads once and
+keeps) and the reset seed.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
-import torch
+from omegaconf import DictConfig
 
+from jugglerl.cluster import open_cluster
 from jugglerl.evaluation import EpisodeMetrics, run_episode
 from jugglerl.policies import Policy
 from jugglerl_envs import JuggleEnv
@@ -32,10 +32,6 @@ class EpisodeTask:
 _worker_policies: dict[str, Policy] = {}
 
 
-def _start_worker() -> None:
-    torch.set_num_threads(1)  # one thread per worker: the workers are the parallelism
-
-
 def run_task(task: EpisodeTask) -> EpisodeMetrics:
     """Run one task here (what a worker does)."""
     from jugglerl.policies.loading import load_policy
@@ -51,12 +47,17 @@ def run_task(task: EpisodeTask) -> EpisodeMetrics:
     return metrics
 
 
-class EpisodePool:
-    """``workers`` processes (0: one per core) that run ``EpisodeTask``s."""
+def run_tasks(tasks: list[EpisodeTask]) -> list[EpisodeMetrics]:
+    """A chunk of tasks, one after the other (what a cluster's worker is handed)."""
+    return [run_task(task) for task in tasks]
 
-    def __init__(self, workers: int = 0):
-        self.workers = workers or os.cpu_count() or 1
-        self._pool = ProcessPoolExecutor(self.workers, initializer=_start_worker)
+
+class EpisodePool:
+    """Runs ``EpisodeTask``s on the cluster of ``cluster`` (``None``: this machine) with
+    ``workers`` local processes (0: one per core)."""
+
+    def __init__(self, workers: int = 0, cluster: DictConfig | None = None):
+        self._cluster = open_cluster(cluster, workers)
 
     def run(
         self,
@@ -65,14 +66,14 @@ class EpisodePool:
     ) -> list[EpisodeMetrics]:
         """The tasks' metrics in the order of ``tasks``; ``on_episode`` sees each as it ends."""
         results = []
-        for metrics in self._pool.map(run_task, tasks, chunksize=1):
+        for metrics in self._cluster.map(run_tasks, tasks):
             results.append(metrics)
             if on_episode is not None:
                 on_episode(metrics)
         return results
 
     def close(self) -> None:
-        self._pool.shutdown()
+        self._cluster.close()
 
     def __enter__(self) -> EpisodePool:
         return self

@@ -111,11 +111,13 @@ def measure(
     duration: float,
     workers: int = 0,
     on_episode: Callable[[], None] | None = None,
+    cluster: DictConfig | None = None,
 ) -> list[dict]:
     """Episodes of every policy under every condition, env seeds ``0..seeds-1``.
 
     Returns one record per (policy, condition): ``policy``, ``family``, ``magnitude``,
-    ``throws`` and ``seconds_up`` (lists over seeds). ``workers`` processes (0: all cores);
+    ``throws`` and ``seconds_up`` (lists over seeds). ``workers`` processes (0: all cores), or
+    the Ray cluster of ``cluster`` (a ``configs/cluster`` group);
     ``on_episode`` is called as each episode finishes (progress bars).
     """
     if seeds < 1:
@@ -128,7 +130,7 @@ def measure(
         for spec, condition in plan
         for seed in range(seeds)
     ]
-    with EpisodePool(workers) as pool:
+    with EpisodePool(workers, cluster) as pool:
         results = pool.run(tasks, None if on_episode is None else lambda _: on_episode())
     records = []
     for index, (spec, condition) in enumerate(plan):

@@ -1,6 +1,7 @@
 """Speed of the off-policy stack against bare PyTorch/MuJoCo loops doing the same work, in one run.
 
     python scripts/bench_collect.py [--frames 20000] [--updates 300] [--repeats 3] [actor=mlp ...]
+    python scripts/bench_collect.py --ray HEAD:6379 [--collectors 2]   # also TorchRL's RayCollector
 
 1. One DDPG update (the ``ddpg`` loss: TorchRL's ``DDPGLoss`` + ``SoftUpdate``) against a bare
    PyTorch update of the same networks on the same batch (TD(0) target from target networks, L2
@@ -11,6 +12,10 @@
    number of envs) with the same actor network and expert-centred noise, resetting dropped envs.
    Target: ratio >= 0.5. The ratio is printed last. With ``teacher.policy=closed_loop`` the
    collector also runs that teacher for every env of the batch (the bare loop does not).
+
+3. With ``--ray ADDRESS``: env steps/s of TorchRL's ``RayCollector`` on that cluster, with
+   ``--collectors`` remote collectors of ``num_envs / collectors`` envs each (the same stack and
+   policy, weights sent to them), against the in-process collector.
 
 Trailing ``key=value`` arguments override ``configs/train.yaml`` (e.g. ``collector.num_envs=16``).
 """
@@ -30,7 +35,9 @@ from hydra import compose, initialize_config_dir
 from torchrl.collectors import Collector
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
+from jugglerl.cluster.ray_tasks import connect
 from jugglerl.config import make_juggle_env
+from jugglerl.offpolicy.env_stack import make_env, normalisation
 from jugglerl.offpolicy.losses.ddpg import DDPG
 from jugglerl.offpolicy.training import OffPolicyTraining
 
@@ -165,6 +172,8 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=20000, help="env steps per collection timing")
     parser.add_argument("--updates", type=int, default=300, help="updates per update timing")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--ray", metavar="ADDRESS", help="also time RayCollector on this cluster")
+    parser.add_argument("--collectors", type=int, default=2, help="RayCollector's collectors")
     args, overrides = parser.parse_known_args()
     configs = Path(__file__).resolve().parents[1] / "configs"
     with initialize_config_dir(str(configs), version_base="1.3"):
@@ -193,7 +202,40 @@ def measure(training: OffPolicyTraining, cfg, args: argparse.Namespace) -> None:
         f"collection, {cfg.collector.num_envs} envs: bare loop {bare:,.0f} env steps/s,"
         f" TorchRL collector{teacher} {ours:,.0f} env steps/s"
     )
+    if args.ray:
+        remote = bench_ray_collector(training, cfg, args)
+        print(
+            f"RayCollector, {args.collectors} collectors x"
+            f" {cfg.collector.num_envs // args.collectors} envs: {remote:,.0f} env steps/s,"
+            f" ratio to the in-process collector {remote / ours:.2f}"
+        )
     print(f"ratio {ours / bare:.2f} (target >= 0.5)")
+
+
+def bench_ray_collector(training: OffPolicyTraining, cfg, args: argparse.Namespace) -> float:
+    """Env steps/s of TorchRL's RayCollector, after one untimed batch (its actors start)."""
+    from torchrl.collectors.distributed import RayCollector
+
+    connect(args.ray)
+    norm = normalisation(training.env)
+    loc, scale = norm.loc.clone(), norm.scale.clone()
+    envs = cfg.collector.num_envs // args.collectors
+    batch = cfg.collector.frames_per_batch
+    collector = RayCollector(
+        [lambda: make_env(cfg, envs, loc, scale)] * args.collectors,
+        training.policy,
+        frames_per_batch=batch,
+        total_frames=batch * (1 + args.frames // batch),
+        remote_configs={"num_cpus": 1, "memory": 1024**3},
+        sync=False,
+    )
+    batches = iter(collector)
+    next(batches)
+    start = time.perf_counter()
+    frames = sum(data.numel() for data in batches)
+    rate = frames / (time.perf_counter() - start)
+    collector.shutdown()
+    return rate
 
 
 if __name__ == "__main__":

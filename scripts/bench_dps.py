@@ -1,12 +1,18 @@
 """Roll-out throughput of DPS's command evaluation against a bare ``mujoco.rollout``.
 
     python scripts/bench_dps.py [--commands 16] [--duration 120] [--threads 2] [--repeats 3]
+    python scripts/bench_dps.py --ray HEAD:6379 [--chunk 1]   # also as Ray tasks (cluster=ray)
 
 Samples commands around the expert from DPS's search distribution (the paper's stds), then times,
 on the same model, start states, controls and thread count:
 - bare: one ``mujoco.rollout`` call on precomputed controls, nothing else;
 - ours: ``CommandRollouts.evaluate`` (controls built, roll-outs, throws counted).
-Prints physics steps/s of each (median of ``--repeats``) and, last, the ratio ours / bare.
+Prints physics steps/s of each (median of ``--repeats``) and the ratio ours / bare. With
+``--ray ADDRESS`` (``local``: Ray started in this process) it then times the same roll-outs as
+Ray tasks of ``--chunk`` commands (``ClusterCommandRollouts``, what ``cluster=ray`` runs; after
+one untimed round, in which the workers start and build their envs), checks they throw the
+same, and prints their rate, the ratio Ray / ours and Ray's cost per task (no-op tasks, in
+CPU-ms: wall time x the cluster's CPUs / tasks).
 """
 
 from __future__ import annotations
@@ -19,7 +25,10 @@ import time
 import mujoco
 import numpy as np
 from mujoco import rollout
+from omegaconf import OmegaConf
 
+from jugglerl.cluster import open_cluster
+from jugglerl.dps.cluster_rollouts import ClusterCommandRollouts
 from jugglerl.dps.distribution import sample_commands
 from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
@@ -33,6 +42,9 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=120.0)
     parser.add_argument("--threads", type=int, default=os.cpu_count())
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--ray", metavar="ADDRESS", help="also time them on this Ray cluster")
+    parser.add_argument("--chunk", type=int, default=1, help="commands per Ray task")
+    parser.add_argument("--noop-tasks", type=int, default=200, help="tasks timing Ray's cost")
     args = parser.parse_args()
 
     env = JuggleEnv(duration=args.duration)
@@ -67,6 +79,36 @@ def main() -> None:
     print(f"bare mujoco.rollout  {bare_rate / 1e3:8.1f} k physics steps/s")
     print(f"CommandRollouts      {our_rate / 1e3:8.1f} k physics steps/s")
     print(f"ratio ours / bare    {our_rate / bare_rate:.3f}")
+    if args.ray:
+        time_on_ray(args, commands, steps, our_rate, results.throws)
+
+
+def echo(items: list) -> list:
+    return items
+
+
+def time_on_ray(args, commands, steps: int, our_rate: float, throws: np.ndarray) -> None:
+    """The same roll-outs as Ray tasks; their rate against ``our_rate`` and Ray's cost per task."""
+    import ray
+
+    cfg = {"name": "ray", "address": args.ray, "chunk": args.chunk, "cpus_per_task": 1}
+    cluster = open_cluster(OmegaConf.create(cfg))
+    cpus = ray.cluster_resources()["CPU"]
+    with ClusterCommandRollouts({"duration": args.duration}, cluster) as remote:
+        same = np.array_equal(remote.evaluate(commands, seeds=0).throws, throws)  # warm-up
+        times = []
+        for _ in range(args.repeats):
+            start = time.perf_counter()
+            remote.evaluate(commands, seeds=0)
+            times.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        list(cluster.map(echo, list(range(args.noop_tasks))))
+        per_task = (time.perf_counter() - start) * cpus / -(-args.noop_tasks // args.chunk)
+    ray_rate = steps / statistics.median(times)
+    print(f"Ray tasks ({cpus:g} CPUs, {args.chunk} per task) {ray_rate / 1e3:8.1f} k physics"
+          f" steps/s; same throws as here: {same}")
+    print(f"Ray cost per task    {per_task * 1e3:.2f} CPU-ms")
+    print(f"ratio Ray / ours     {ray_rate / our_rate:.3f}")
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 python scripts/robustness.py                                  # expert and best DPS command
 python scripts/robustness.py 'policies=[dps_best,outputs/train/ddpg/<run>]' seeds=20
 python scripts/robustness.py seeds=2 duration=10 'select=[kicks]' 'families.kicks.magnitudes=[0.1]'
+python scripts/robustness.py cluster=ray cluster.address=HEAD:6379  # the episodes as Ray tasks
 
 Writes to the run directory (``outputs/robustness/<time>``): ``robustness.md`` (the table, and
 where the reference open-loop policy breaks), ``robustness.json`` (every episode's throws and
@@ -24,6 +25,7 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
 from jugglerl import robustness
+from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config_types import check_override_types
 from jugglerl.recording.logger import RerunLogger
 
@@ -63,6 +65,7 @@ def main(cfg: DictConfig) -> None:
                 cfg.duration,
                 cfg.workers,
                 on_episode=bar.update,
+                cluster=cfg.cluster,
             )
     except ValueError as error:
         sys.exit(f"error: {error}")
@@ -90,4 +93,5 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
+    register_sweep_launcher()
     main()

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Create ./.venv and install JuggleRL (editable) with its test tools. Safe to re-run.
+# EXTRAS=test,ray adds the optional Ray extra (cluster=ray and its tests; CI installs it).
 # Prints a line per step; pip's own output (pages of setuptools warnings) only when a step fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,6 +23,7 @@ step "upgrading pip" .venv/bin/python -m pip install --quiet --upgrade pip
 # torch first, pinned: on this project's machines 2.13.0 is a local CPU build, while a looser
 # request lets pip resolve the newest release with several GB of CUDA wheels.
 step "installing torch 2.13.0" .venv/bin/python -m pip install --quiet "torch==2.13.0"
-step "installing jugglerl (editable) and its test tools" \
-    .venv/bin/python -m pip install --quiet -e ".[test]"
+EXTRAS=${EXTRAS:-test}
+step "installing jugglerl (editable) with [$EXTRAS]" \
+    .venv/bin/python -m pip install --quiet -e ".[$EXTRAS]"
 echo "setup: done: .venv/bin/python ($(.venv/bin/python --version 2>&1))"

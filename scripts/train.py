@@ -9,6 +9,8 @@ python scripts/train.py algo.loss=td3 teacher.policy=closed_loop_tolerant  # TD3
 python scripts/train.py algo=dps                              # eREPS from the expert, 500 roll-outs
 python scripts/train.py algo=feedback                         # closed loop: eREPS over its gains
 python scripts/train.py resume=outputs/train/<algo>/<run>     # continue from its checkpoint
+python scripts/train.py algo=dps cluster=ray cluster.address=HEAD:6379  # roll-outs on Ray
+python scripts/train.py -m seed=0,1,2 cluster=ray             # a sweep's jobs as Ray tasks
 python scripts/evaluate.py policy=outputs/train/<algo>/<run>  # run what it deploys
 rerun outputs/train/<algo>/<run>/train.rrd                    # learning curves, episodes
 """
@@ -22,6 +24,7 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
+from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config_types import check_override_types
 from jugglerl.training import resume_state, train
 
@@ -41,4 +44,5 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
+    register_sweep_launcher()
     main()

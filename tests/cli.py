@@ -50,12 +50,15 @@ def run_train(*overrides: str, timeout: float = 300) -> subprocess.CompletedProc
     return run_script("train.py", *overrides, timeout=timeout)
 
 
-def run_script(name: str, *overrides: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    """``python scripts/<name> *overrides`` to completion, run from the repository root."""
+def run_script(
+    name: str, *overrides: str, timeout: float = 300, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess:
+    """``python scripts/<name> *overrides`` to completion, run from the repository root, with
+    ``env`` added to its environment."""
     script = str(ROOT / "scripts" / name)
     with tempfile.TemporaryDirectory() as folder:
         out, err = Path(folder, "stdout"), Path(folder, "stderr")
-        child = _SERVER.Process(target=_run_as_main, args=(script, overrides, out, err))
+        child = _SERVER.Process(target=_run_as_main, args=(script, overrides, out, err, env))
         child.start()
         child.join(timeout)
         if child.exitcode is None:
@@ -67,9 +70,12 @@ def run_script(name: str, *overrides: str, timeout: float = 300) -> subprocess.C
         )
 
 
-def _run_as_main(script: str, overrides: tuple[str, ...], out: Path, err: Path) -> None:
+def _run_as_main(
+    script: str, overrides: tuple[str, ...], out: Path, err: Path, env: dict[str, str] | None
+) -> None:
     """In the forked child: run ``script`` as ``__main__`` and exit with the interpreter's code."""
     os.chdir(ROOT)
+    os.environ.update(env or {})
     for stream, path in ((1, out), (2, err)):
         os.dup2(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC), stream)
     sys.argv = [script, *overrides]

@@ -41,6 +41,15 @@ class RolloutResults:
     time_to_drop: np.ndarray
 
 
+def seeds_per_command(seeds: Sequence[int | None] | int | None, count: int) -> list[int | None]:
+    """One reset seed per command: ``seeds`` as given, or one seed (or ``None``) for all."""
+    if not isinstance(seeds, Sequence):
+        return [seeds] * count
+    if len(seeds) != count:
+        raise ValueError(f"{len(seeds)} seeds for {count} commands")
+    return list(seeds)
+
+
 class CommandRollouts:
     """Rolls out open-loop commands on the scene of ``env`` (its model, start state and limits).
 
@@ -114,10 +123,7 @@ class CommandRollouts:
         self, commands: Sequence[ViaPointCommand], seeds: Sequence[int | None] | int | None = 0
     ) -> RolloutResults:
         """Throws and drop times of each command, from the env's start state for its seed."""
-        if not isinstance(seeds, Sequence):
-            seeds = [seeds] * len(commands)
-        if len(seeds) != len(commands):
-            raise ValueError(f"{len(seeds)} seeds for {len(commands)} commands")
+        seeds = seeds_per_command(seeds, len(commands))
         throws = np.zeros(len(commands), dtype=int)
         time_to_drop = np.full(len(commands), np.nan)
         for first in range(0, len(commands), MAX_BATCH):

@@ -3,8 +3,9 @@
 θ is ``FeedbackGains`` (bounded by ``algo.bounds``), searched from ``algo.start``; the command it
 locks to is fixed (``algo.command``). Every θ is rolled out closed loop in the Python env, once
 under each of ``algo.conditions`` (env overrides: nominal, kicks, start offsets), in
-``algo.workers`` processes; its return is its throws summed over the conditions, so the search
-prefers gains that juggle in all of them. The best θ is written as ``best_policy.yaml``.
+``algo.workers`` processes (or as tasks of ``cluster=ray``); its return is its throws summed
+over the conditions, so the search prefers gains that juggle in all of them. The best θ is
+written as ``best_policy.yaml``.
 """
 
 from __future__ import annotations
@@ -46,11 +47,17 @@ class FeedbackRollouts:
     seed ``seeds[i] + k``.
     """
 
-    def __init__(self, env_cfg: DictConfig, conditions: list[dict], workers: int):
+    def __init__(
+        self,
+        env_cfg: DictConfig,
+        conditions: list[dict],
+        workers: int,
+        cluster: DictConfig | None = None,
+    ):
         base = OmegaConf.to_container(env_cfg, resolve=True)
         self.envs = [{**base, **condition} for condition in conditions]
         self.templates = [make_juggle_env(OmegaConf.create(env)) for env in self.envs]
-        self._pool = EpisodePool(workers)
+        self._pool = EpisodePool(workers, cluster)
 
     def evaluate(self, candidates: list[tuple], seeds: list[int]) -> RolloutResults:
         tasks = [
@@ -117,7 +124,9 @@ class ClosedLoopSpace:
         conditions = [dict(c) for c in self.cfg.algo.conditions]
         if reset_noise is not None:
             conditions = [{"reset_noise": reset_noise}]
-        return FeedbackRollouts(self.cfg.env, conditions, self.cfg.algo.workers)
+        return FeedbackRollouts(
+            self.cfg.env, conditions, self.cfg.algo.workers, self.cfg.get("cluster")
+        )
 
     def policy(self, params: torch.Tensor, env: gym.Env) -> FeedbackPolicy:
         return FeedbackPolicy(*self.decode(params), env)

@@ -12,10 +12,12 @@ from pathlib import Path
 
 import gymnasium as gym
 import torch
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
+from jugglerl.cluster import is_distributed, open_cluster
 from jugglerl.commands import ViaPointCommand
 from jugglerl.config import make_juggle_env
+from jugglerl.dps.cluster_rollouts import ClusterCommandRollouts
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.params import (
     ViaPointConstraints,
@@ -72,7 +74,15 @@ class ViaPointSpace:
         return make_juggle_env(self.cfg.env, reset_noise=noise)
 
     def rollouts(self, reset_noise: float | None = None) -> CommandRollouts:
-        return CommandRollouts(self.search_env(reset_noise), nthread=self.cfg.algo.threads)
+        """In C on ``algo.threads`` threads here, or as tasks of a distributed ``cluster``."""
+        cluster = self.cfg.get("cluster")
+        env = self.search_env(reset_noise)
+        if not is_distributed(cluster):
+            return CommandRollouts(env, nthread=self.cfg.algo.threads)
+        env.close()  # built to check the values; the workers build their own
+        noise = self.reset_noise if reset_noise is None else reset_noise
+        kwargs = {**OmegaConf.to_container(self.cfg.env, resolve=True), "reset_noise": noise}
+        return ClusterCommandRollouts(kwargs, open_cluster(cluster))
 
     def policy(self, params: torch.Tensor, env: gym.Env) -> CommandPolicy:
         return CommandPolicy(self.decode(params))

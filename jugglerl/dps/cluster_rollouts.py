@@ -1,0 +1,79 @@
+"""``ClusterCommandRollouts``: ``CommandRollouts`` spread over a distributed cluster's tasks.
+
+On ``cluster=ray`` the open-loop roll-outs of DPS go out one command per item (chunked by
+``cluster.chunk``); each worker process builds the env and its ``CommandRollouts`` once per env
+configuration and keeps them, with one ``mujoco.rollout`` thread per CPU its task holds. A
+roll-out depends only on its command, its env and its seed, and the results come back in the
+order asked, so a seeded search gives the same commands, to the last bit, as on one machine.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from jugglerl.cluster import Cluster
+from jugglerl.commands import ViaPointCommand
+from jugglerl.dps.rollouts import CommandRollouts, RolloutResults, seeds_per_command
+from jugglerl_envs import JuggleEnv
+
+
+@dataclass(frozen=True)
+class RolloutItem:
+    """One roll-out: ``command`` on ``JuggleEnv(**env)`` from the start of reset ``seed``."""
+
+    env: dict
+    command: ViaPointCommand
+    seed: int | None
+
+
+_worker_rollouts: dict[str, CommandRollouts] = {}
+
+
+def roll_out(items: list[RolloutItem]) -> list[tuple[int, float]]:
+    """(throws, time to drop) of each item (what a worker does): the chunk's roll-outs batched
+    per env, on the CPUs the task was given (Ray sets ``OMP_NUM_THREADS`` to them)."""
+    results: list[tuple[int, float] | None] = [None] * len(items)
+    by_env: dict[str, list[int]] = {}
+    for index, item in enumerate(items):
+        by_env.setdefault(repr(sorted(item.env.items())), []).append(index)
+    for key, indices in by_env.items():
+        if key not in _worker_rollouts:
+            threads = int(os.environ.get("OMP_NUM_THREADS", "1"))
+            _worker_rollouts[key] = CommandRollouts(JuggleEnv(**items[indices[0]].env), threads)
+        batch = _worker_rollouts[key].evaluate(
+            [items[i].command for i in indices], [items[i].seed for i in indices]
+        )
+        for i, throws, drop in zip(indices, batch.throws, batch.time_to_drop, strict=True):
+            results[i] = (int(throws), float(drop))
+    return results
+
+
+class ClusterCommandRollouts:
+    """``evaluate(commands, seeds)`` as ``CommandRollouts`` gives it, on ``cluster``'s tasks;
+    ``env`` is the keyword arguments of the roll-outs' ``JuggleEnv``."""
+
+    def __init__(self, env: dict, cluster: Cluster):
+        self.env = env
+        self.cluster = cluster
+
+    def evaluate(
+        self, commands: Sequence[ViaPointCommand], seeds: Sequence[int | None] | int | None = 0
+    ) -> RolloutResults:
+        seeds = seeds_per_command(seeds, len(commands))
+        items = [RolloutItem(self.env, c, s) for c, s in zip(commands, seeds, strict=True)]
+        results = list(self.cluster.map(roll_out, items))
+        throws = np.array([throws for throws, _ in results], dtype=int)
+        return RolloutResults(throws, np.array([drop for _, drop in results]))
+
+    def close(self) -> None:
+        self.cluster.close()
+
+    def __enter__(self) -> ClusterCommandRollouts:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
