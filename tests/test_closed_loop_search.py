@@ -54,3 +54,10 @@ def test_train_closed_loop_writes_a_feedback_policy(tmp_path):
     assert "closed_loop (cmaes): best scored" in result.stdout
     best = load_policy(str(run_dir / "best_policy.yaml"), JuggleEnv())
     assert best.command.cycle == metrics["command"]["cycle"]
+
+
+def test_a_zero_std_under_cmaes_is_one_error_line(tmp_path):
+    result = run_train("algo=closed_loop", "algo.std.phase_gain=0", f"hydra.run.dir={tmp_path}")
+    assert result.returncode == 1
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: algo.std: CMA-ES needs every std > 0"), result.stderr[-2000:]

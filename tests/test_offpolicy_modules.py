@@ -214,9 +214,12 @@ def test_lstm_actor_gives_the_same_actions_step_by_step_and_in_recurrent_mode():
     torch.testing.assert_close(replay["action"], data["action"], atol=1e-5, rtol=0)
 
 
-@pytest.mark.parametrize("actor_name", ["mlp", "lstm", "residual"])
-def test_actor_policy_acts_as_the_actor_does_in_the_env_stack(actor_name):
-    cfg, env, actor = stack(f"actor={actor_name}", "collector.num_envs=1")
+@pytest.mark.parametrize(
+    "actor_name, state",
+    [("mlp", []), ("lstm", []), ("residual", []), ("lstm", ["state.ball_clock=true"])],
+)
+def test_actor_policy_acts_as_the_actor_does_in_the_env_stack(actor_name, state):
+    cfg, env, actor = stack(f"actor={actor_name}", "collector.num_envs=1", *state)
     with set_exploration_type(ExplorationType.DETERMINISTIC), torch.no_grad():
         data = env.rollout(100, actor)
     norm = normalisation(env)

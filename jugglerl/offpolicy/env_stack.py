@@ -15,11 +15,13 @@ input ``state`` beside them:
 | ``RewardSum`` | ``episode_reward``: the return of the running episode |
 | ``ObservationNorm`` | standardises ``state`` (stats fitted on random steps) |
 | ``TimestampFeatures`` | appends elapsed time and cycle phase to ``state`` (``state.timestamp``) |
+| ``BallClock`` | appends the phase since the ball last fell past the cup (``state.ball_clock``) |
 | ``TensorDictPrimer`` | the actor's zero recurrent state on reset (recurrent actors only) |
 
-``state`` is therefore 18 normalised values plus, with the timestamp, 3 time features
-(``state_size``). ``state_transforms`` builds the copy, the cast, the normalisation and the time
-features on their own, so that a trained actor runs outside TorchRL
+``state`` is therefore 18 normalised values plus, with the timestamp, ``1 + 2 harmonics`` time
+features and, with the ball clock, ``2 harmonics`` more (``state_size``). ``state_transforms``
+builds the copy, the cast, the normalisation, the time features and the ball clock on their
+own, so that a trained actor runs outside TorchRL
 (``jugglerl.policies.actor.ActorPolicy``) on exactly the same inputs.
 """
 
@@ -44,7 +46,8 @@ from torchrl.envs import (
 from torchrl.envs.libs.gym import default_info_dict_reader
 
 from jugglerl.offpolicy.actors import primer
-from jugglerl.offpolicy.timestamp import NUM_TIME_FEATURES, TimestampFeatures
+from jugglerl.offpolicy.ball_clock import BallClock, num_ball_clock_features
+from jugglerl.offpolicy.timestamp import TimestampFeatures, num_time_features
 from jugglerl_envs import ENV_ID
 
 #: The info entries training and evaluation read, all numeric (see ``NumericInfo``), and their
@@ -99,16 +102,23 @@ def make_vector_env(env_cfg: DictConfig, num_envs: int) -> gym.vector.VectorEnv:
         raise ValueError(f"env config: {error}") from None
 
 
+def _harmonics(state_cfg: DictConfig) -> int:
+    return state_cfg.get("harmonics", 1)  # runs saved before the key existed had one
+
+
 def state_size(state_cfg: DictConfig) -> int:
-    """Size of the networks' input ``state``: the observation and, optionally, time features."""
-    return OBSERVATION_SIZE + (NUM_TIME_FEATURES if state_cfg.timestamp else 0)
+    """Size of the networks' input ``state``: the observation and, optionally, time features
+    and the ball clock."""
+    harmonics = _harmonics(state_cfg)
+    size = OBSERVATION_SIZE + (num_time_features(harmonics) if state_cfg.timestamp else 0)
+    return size + (num_ball_clock_features(harmonics) if state_cfg.get("ball_clock") else 0)
 
 
 def state_transforms(
     state_cfg: DictConfig, duration: float, loc: torch.Tensor | None, scale: torch.Tensor | None
 ) -> list[Transform]:
     """``state`` from the observation: copied, cast to float32, normalised and (with
-    ``state_cfg.timestamp``) given the time features.
+    ``state_cfg.timestamp``, ``state_cfg.ball_clock``) given the time features and the ball clock.
 
     ``loc``/``scale`` of ``None`` leave the normalisation to be fitted by ``fit_normalisation``.
     """
@@ -117,8 +127,11 @@ def state_transforms(
         DoubleToFloat(in_keys=["state"]),
         ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True),
     ]
+    harmonics = _harmonics(state_cfg)
     if state_cfg.timestamp:
-        transforms.append(TimestampFeatures(duration=duration, period=state_cfg.period))
+        transforms.append(TimestampFeatures(duration, state_cfg.period, harmonics))
+    if state_cfg.get("ball_clock"):
+        transforms.append(BallClock(state_cfg.period, harmonics, state_cfg.ball_clock_height))
     return transforms
 
 

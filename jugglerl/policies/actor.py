@@ -1,8 +1,9 @@
 """``ActorPolicy``: a trained actor as a plain ``Policy`` (observation, time) -> action.
 
 It feeds the actor exactly what it saw in training, through the same transforms
-(``state_transforms``: the state copy, its cast, normalisation and time features), and carries
-the actor's recurrent state from step to step, so ``scripts/evaluate.py`` and the periodic
+(``state_transforms``: the state copy, its cast, normalisation, time features and ball clock),
+and carries the actor's recurrent state and the transforms' memory (``carried_keys``) from step
+to step, so ``scripts/evaluate.py`` and the periodic
 evaluation run any Gymnasium ``JuggleEnv`` (with recorders or perturbations wrapped around it)
 without TorchRL's env stack.
 """
@@ -79,8 +80,9 @@ class ActorPolicy:
             data = transform(data)
         with torch.no_grad(), set_exploration_type(ExplorationType.DETERMINISTIC):
             data = self.actor(data)
-        # the next step starts from the state this one left
-        self._memory = TensorDict(
-            {key: data.get(("next", key)) for key in self.recurrent}, batch_size=[1]
-        )
+        # the next step starts from the state this one left: the actor's and the transforms'
+        memory = {key: data.get(("next", key)) for key in self.recurrent}
+        for transform in self.transforms:
+            memory.update({key: data.get(key) for key in getattr(transform, "carried_keys", ())})
+        self._memory = TensorDict(memory, batch_size=[1])
         return data["action"][0].numpy()

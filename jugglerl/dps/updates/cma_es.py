@@ -31,6 +31,12 @@ class CMAES(UpdateRule):
 
     @classmethod
     def from_config(cls, algo, initial_stds):
+        if torch.any(torch.as_tensor(initial_stds) <= 0):
+            # the package inverts C: a zero variance ends the run in a linear-algebra error
+            raise ValueError(
+                "algo.std: CMA-ES needs every std > 0; to hold a parameter fixed, give it equal"
+                " bounds (algo.bounds.NAME=[v,v]) and a small std"
+            )
         return cls(algo.rollouts)
 
     def __call__(self, distribution, params, returns):
