@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -20,36 +20,20 @@ from jugglerl.commands import ViaPointCommand
 from jugglerl.dps.rollouts import CommandRollouts, RolloutResults, seeds_per_command
 from jugglerl_envs import JuggleEnv
 
-
-@dataclass(frozen=True)
-class RolloutItem:
-    """One roll-out: ``command`` on ``JuggleEnv(**env)`` from the start of reset ``seed``."""
-
-    env: dict
-    command: ViaPointCommand
-    seed: int | None
-
-
 _worker_rollouts: dict[str, CommandRollouts] = {}
 
 
-def roll_out(items: list[RolloutItem]) -> list[tuple[int, float]]:
-    """(throws, time to drop) of each item (what a worker does): the chunk's roll-outs batched
-    per env, on the CPUs the task was given (Ray sets ``OMP_NUM_THREADS`` to them)."""
-    results: list[tuple[int, float] | None] = [None] * len(items)
-    by_env: dict[str, list[int]] = {}
-    for index, item in enumerate(items):
-        by_env.setdefault(repr(sorted(item.env.items())), []).append(index)
-    for key, indices in by_env.items():
-        if key not in _worker_rollouts:
-            threads = int(os.environ.get("OMP_NUM_THREADS", "1"))
-            _worker_rollouts[key] = CommandRollouts(JuggleEnv(**items[indices[0]].env), threads)
-        batch = _worker_rollouts[key].evaluate(
-            [items[i].command for i in indices], [items[i].seed for i in indices]
-        )
-        for i, throws, drop in zip(indices, batch.throws, batch.time_to_drop, strict=True):
-            results[i] = (int(throws), float(drop))
-    return results
+def roll_out(env: dict, items: list[tuple[ViaPointCommand, int | None]]) -> list[tuple]:
+    """(throws, time to drop) of each ``(command, reset seed)`` on ``JuggleEnv(**env)`` (what a
+    worker does): the chunk in one batch, on the CPUs the task was given (Ray sets
+    ``OMP_NUM_THREADS`` to them)."""
+    key = repr(sorted(env.items()))
+    if key not in _worker_rollouts:
+        threads = int(os.environ.get("OMP_NUM_THREADS", "1"))
+        _worker_rollouts[key] = CommandRollouts(JuggleEnv(**env), threads)
+    commands, seeds = zip(*items, strict=True)
+    batch = _worker_rollouts[key].evaluate(list(commands), list(seeds))
+    return [(int(t), float(d)) for t, d in zip(batch.throws, batch.time_to_drop, strict=True)]
 
 
 class ClusterCommandRollouts:
@@ -63,9 +47,8 @@ class ClusterCommandRollouts:
     def evaluate(
         self, commands: Sequence[ViaPointCommand], seeds: Sequence[int | None] | int | None = 0
     ) -> RolloutResults:
-        seeds = seeds_per_command(seeds, len(commands))
-        items = [RolloutItem(self.env, c, s) for c, s in zip(commands, seeds, strict=True)]
-        results = list(self.cluster.map(roll_out, items))
+        items = list(zip(commands, seeds_per_command(seeds, len(commands)), strict=True))
+        results = list(self.cluster.map(partial(roll_out, self.env), items))
         throws = np.array([throws for throws, _ in results], dtype=int)
         return RolloutResults(throws, np.array([drop for _, drop in results]))
 

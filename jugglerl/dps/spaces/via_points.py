@@ -79,9 +79,9 @@ class ViaPointSpace:
         env = self.search_env(reset_noise)
         if not is_distributed(cluster):
             return CommandRollouts(env, nthread=self.cfg.algo.threads)
-        env.close()  # built to check the values; the workers build their own
-        noise = self.reset_noise if reset_noise is None else reset_noise
-        kwargs = {**OmegaConf.to_container(self.cfg.env, resolve=True), "reset_noise": noise}
+        env.close()  # built to check the values here; the workers build their own
+        kwargs = OmegaConf.to_container(self.cfg.env, resolve=True)
+        kwargs["reset_noise"] = env.unwrapped.reset_noise
         return ClusterCommandRollouts(kwargs, open_cluster(cluster))
 
     def policy(self, params: torch.Tensor, env: gym.Env) -> CommandPolicy:
