@@ -122,6 +122,30 @@ def test_behaviour_cloning_brings_the_actor_to_the_teachers_actions():
     assert float(error.pow(2).mean()) == pytest.approx(last, rel=0.5)
 
 
+def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it():
+    cfg, actor, update, data = transitions("algo=bc", "+algo.bc_tau=0.25")
+    batch = data.reshape(-1)
+    expected = None
+    for _ in range(4):
+        update(batch)
+        weights = {k: v.detach().clone() for k, v in actor.state_dict().items()}
+        expected = weights if expected is None else {
+            k: expected[k] + 0.25 * (weights[k] - expected[k]) for k in weights}
+    deployed = update.target_actor().state_dict()
+    for key, value in expected.items():
+        torch.testing.assert_close(deployed[key], value)
+    assert any(not torch.equal(deployed[k], v) for k, v in actor.state_dict().items())
+    _, _, again, _ = transitions("algo=bc", "+algo.bc_tau=0.25")
+    again.load_state_dict(update.state_dict())
+    for key, value in again.target_actor().state_dict().items():
+        torch.testing.assert_close(value, deployed[key])
+
+
+def test_a_bc_tau_outside_zero_one_says_so():
+    with pytest.raises(ValueError, match=r"algo.bc_tau=1.5 must be in \(0, 1\]"):
+        transitions("algo=bc", "+algo.bc_tau=1.5")
+
+
 @pytest.mark.parametrize("algo", ["ddpg", "td3"])
 def test_a_bc_weight_adds_the_cloning_term_to_the_rl_loss(algo):
     _, _, update, data = transitions(f"algo={algo}", "algo.bc_weight=2.5")

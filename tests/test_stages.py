@@ -31,7 +31,7 @@ STAGED = [
 def test_the_apprentice_stages_clone_then_dagger_then_rl():
     bc, dagger, rl = stages_from_config(train_config("algo=apprentice"))
     assert [s.name for s in (bc, dagger, rl)] == ["bc", "dagger", "rl"]
-    assert (bc.start, bc.end, dagger.end, rl.end) == (0, 40960, 102400, 163840)
+    assert (bc.start, bc.end, dagger.end, rl.end) == (0, 327680, 368640, 491520)
     assert bc.cfg.algo.loss == dagger.cfg.algo.loss == "bc" and rl.cfg.algo.loss == "ddpg"
     assert bc.cfg.exploration.centre == "teacher" and bc.cfg.exploration.expert_weight_init == 1
     assert dagger.cfg.exploration.expert_weight_init == 0 and dagger.cfg.exploration.sigma_init == 0
@@ -39,13 +39,15 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert rl.cfg.algo.bc_weight == 100.0 and rl.bc_weight_at(rl.end) == pytest.approx(10.0)
     assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(55.0)
     assert bc.cfg.optim.lr_actor == 1e-3 and rl.cfg.optim.lr_actor == 1e-4
+    assert bc.cfg.optim.updates_per_batch == dagger.cfg.optim.updates_per_batch == 32
+    assert rl.cfg.optim.updates_per_batch == 256 and rl.cfg.algo.bc_tau == 0.001
     assert rl.actor_frozen(rl.start + 10240) and not rl.actor_frozen(rl.start + 10241)
     assert (
         stages_from_config(train_config("algo=apprentice", "algo.loss=td3"))[2].cfg.algo.loss
         == "td3"
     )
-    short = stages_from_config(train_config("algo=apprentice", "collector.total_frames=50000"))
-    assert [(s.name, s.end) for s in short] == [("bc", 40960), ("dagger", 50000)]
+    short = stages_from_config(train_config("algo=apprentice", "collector.total_frames=340000"))
+    assert [(s.name, s.end) for s in short] == [("bc", 327680), ("dagger", 340000)]
 
 
 def test_a_run_without_stages_is_one_stage_of_its_loss():
@@ -95,6 +97,22 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
     assert "loss_critic" in metrics["history"][-1] and "loss_bc" in metrics["history"][-1]
     for key, value in again.actor.state_dict().items():  # the warm-up kept the actor still
         torch.testing.assert_close(value, actor[key])
+    again.close()
+
+
+def test_a_stage_starts_from_the_average_the_stage_before_deploys(tmp_path):
+    cfg = train_config(*STAGED, "+algo.bc_tau=0.5", "+algo.stages.1.optim.updates_per_batch=0")
+    cfg.collector.total_frames = 128  # the BC stage alone
+    _, training = train(cfg, tmp_path / "run")
+    average = training.update.target_actor().state_dict()
+    online = training.actor.state_dict()
+    assert any(not torch.equal(average[k], online[k]) for k in online)
+    training.close()
+    cfg.collector.total_frames = 256  # resumed into DAgger, which does not update here
+    _, again = train(cfg, tmp_path / "run", load_checkpoint(tmp_path / "run"))
+    assert again.stage.name == "dagger"
+    for key, value in again.actor.state_dict().items():
+        torch.testing.assert_close(value, average[key])
     again.close()
 
 

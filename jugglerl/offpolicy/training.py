@@ -148,9 +148,12 @@ class OffPolicyTraining:
         return metrics
 
     def _train(self, logger: RerunLogger, bar: tqdm) -> None:
-        """Each stage from the current one, each collected to its end."""
+        """Each stage from the current one, each collected to its end. A stage starts from the
+        actor the one before would deploy (``current_actor``: with ``eval.target_actor`` its
+        average or target), not from its last online weights."""
         for stage in self.stages[self.stage.index :]:
             if stage is not self.stage:
+                self.actor.load_state_dict(self.current_actor().state_dict())
                 self._enter(stage)
             if self.frames < stage.end:
                 self._train_stage(logger, bar)
