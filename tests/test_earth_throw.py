@@ -1,0 +1,42 @@
+"""scripts/earth_throw.py: a throw over the threshold at real gravity within the speed limit."""
+
+import importlib.util
+import math
+import sys
+
+import numpy as np
+from cli import ROOT, run_script
+
+spec = importlib.util.spec_from_file_location("earth_throw", ROOT / "scripts" / "earth_throw.py")
+earth_throw = importlib.util.module_from_spec(spec)
+sys.modules["earth_throw"] = earth_throw  # its dataclass looks its module up there
+spec.loader.exec_module(earth_throw)
+
+#: The best throw of ``python scripts/earth_throw.py`` (seed 1): a wind-up, then lift and elbow
+#: rising together (README, env=earth).
+FOUND = np.array([-1.479, 1.577, 0.3218, 0.182, -1.061, 2.0, 0.247, -1.954, 1.196, 1.277, -1.257,
+                  1.93])
+
+
+def test_the_found_throw_clears_one_metre_within_pi_rad_per_s_and_the_cup_limit():
+    throw = earth_throw.simulate(FOUND)
+    assert throw.throws == 1 and throw.apex > 1.05
+    assert max(throw.peak_speed) <= math.pi and throw.max_cup <= 0.76
+    assert 0.2 < throw.landing_offset < 0.6  # it comes down away from where it left
+
+
+def test_the_experts_elbow_flick_does_not_leave_the_cup_at_earth():
+    # expert.yaml's throw: elbow 2.15 -> 1.5 rad with the upper arm vertical, the cup upright
+    flick = np.array([-1.5708, 2.15, 0.15, 0.5, -1.5708, 1.5, 0.5, -1.5708, 2.15, 0.5, -1.5708,
+                      2.15])
+    throw = earth_throw.simulate(flick)
+    assert throw is not None and throw.throws == 0 and throw.apex < 1.0
+
+
+def test_a_short_search_prints_its_throw_and_bad_budgets_are_one_error_line():
+    result = run_script("earth_throw.py", "--restarts", "1", "--generations", "2")
+    assert result.returncode == 0, result.stderr[-2000:]
+    last = result.stdout.strip().splitlines()[-1]
+    assert last.startswith("apex ") and "peak joint speeds" in last
+    bad = run_script("earth_throw.py", "--restarts", "0")
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith("must be >= 1")
