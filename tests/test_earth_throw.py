@@ -12,17 +12,17 @@ earth_throw = importlib.util.module_from_spec(spec)
 sys.modules["earth_throw"] = earth_throw  # its dataclass looks its module up there
 spec.loader.exec_module(earth_throw)
 
-#: The best throw of ``python scripts/earth_throw.py`` (seed 1): a wind-up, then lift and elbow
-#: rising together (README, env=earth).
-FOUND = np.array([-1.479, 1.577, 0.3218, 0.182, -1.061, 2.0, 0.247, -1.954, 1.196, 1.277, -1.257,
-                  1.93])
+#: The best throw of ``python scripts/earth_throw.py`` (defaults, seed 1), as it prints it: a
+#: wind-up raising the upper arm, then lift and elbow swinging up together (README, env=earth).
+FOUND = np.array([-1.507, 1.675, 0.187,  # start lift, elbow, tilt; then knots (s, lift, elbow)
+                  0.58, -0.640, 1.640, 0.246, -1.516, 0.649, 0.29, 0.0, 2.696])
 
 
 def test_the_found_throw_clears_one_metre_within_pi_rad_per_s_and_the_cup_limit():
     throw = earth_throw.simulate(FOUND)
-    assert throw.throws == 1 and throw.apex > 1.05
+    assert throw.throws == 1 and throw.apex > 1.3
     assert max(throw.peak_speed) <= math.pi and throw.max_cup <= 0.76
-    assert 0.2 < throw.landing_offset < 0.6  # it comes down away from where it left
+    assert 0.4 < throw.landing_offset < 0.5  # it comes down away from where it left
 
 
 def test_the_experts_elbow_flick_does_not_leave_the_cup_at_earth():
@@ -30,7 +30,8 @@ def test_the_experts_elbow_flick_does_not_leave_the_cup_at_earth():
     flick = np.array([-1.5708, 2.15, 0.15, 0.5, -1.5708, 1.5, 0.5, -1.5708, 2.15, 0.5, -1.5708,
                       2.15])
     throw = earth_throw.simulate(flick)
-    assert throw is not None and throw.throws == 0 and throw.apex < 1.0
+    assert throw is not None and throw.throws == 0 and throw.apex == 0.0  # never leaves
+    assert max(throw.peak_speed) < 0.7 * math.pi  # the lagging servo never reaches the limit
 
 
 def test_a_short_search_prints_its_throw_and_bad_budgets_are_one_error_line():

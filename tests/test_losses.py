@@ -123,7 +123,7 @@ def test_behaviour_cloning_brings_the_actor_to_the_teachers_actions():
 
 
 def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it():
-    cfg, actor, update, data = transitions("algo=bc", "+algo.bc_tau=0.25")
+    cfg, actor, update, data = transitions("algo=bc", "algo.bc_tau=0.25")
     batch = data.reshape(-1)
     expected = None
     for _ in range(4):
@@ -135,7 +135,7 @@ def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it
     for key, value in expected.items():
         torch.testing.assert_close(deployed[key], value)
     assert any(not torch.equal(deployed[k], v) for k, v in actor.state_dict().items())
-    _, _, again, _ = transitions("algo=bc", "+algo.bc_tau=0.25")
+    _, _, again, _ = transitions("algo=bc", "algo.bc_tau=0.25")
     again.load_state_dict(update.state_dict())
     for key, value in again.target_actor().state_dict().items():
         torch.testing.assert_close(value, deployed[key])
@@ -143,7 +143,7 @@ def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it
 
 def test_a_bc_tau_outside_zero_one_says_so():
     with pytest.raises(ValueError, match=r"algo.bc_tau=1.5 must be in \(0, 1\]"):
-        transitions("algo=bc", "+algo.bc_tau=1.5")
+        transitions("algo=bc", "algo.bc_tau=1.5")
 
 
 @pytest.mark.parametrize("algo", ["ddpg", "td3"])

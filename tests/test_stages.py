@@ -87,9 +87,10 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
     cfg.collector.total_frames = 384
     resumed = OffPolicyTraining(cfg, tmp_path / "run", state)
     assert resumed.stage.name == "dagger"  # where it was saved; the run moves on from there
-    actor = {k: v.clone() for k, v in resumed.actor.state_dict().items()}
     for key, value in training.actor.state_dict().items():  # the cloned actor carries over
-        torch.testing.assert_close(actor[key], value)
+        torch.testing.assert_close(resumed.actor.state_dict()[key], value)
+    # the RL stage starts from the actor DAgger deploys: its moving average (algo.bc_tau)
+    actor = {k: v.clone() for k, v in resumed.current_actor().state_dict().items()}
     resumed.close()
     metrics, again = train(cfg, tmp_path / "run", state)
     assert [h["stage"] for h in metrics["history"]] == [0, 1, 2]
@@ -101,7 +102,7 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
 
 
 def test_a_stage_starts_from_the_average_the_stage_before_deploys(tmp_path):
-    cfg = train_config(*STAGED, "+algo.bc_tau=0.5", "+algo.stages.1.optim.updates_per_batch=0")
+    cfg = train_config(*STAGED, "algo.bc_tau=0.5", "algo.stages.1.optim.updates_per_batch=0")
     cfg.collector.total_frames = 128  # the BC stage alone
     _, training = train(cfg, tmp_path / "run")
     average = training.update.target_actor().state_dict()
