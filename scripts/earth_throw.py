@@ -5,11 +5,12 @@ expert's elbow flick would need about twice the limit. This script searches one 
 rest: a start pose (shoulder lift, elbow; wrist_1 set so the cup is upright there, plus a tilt),
 then three setpoint knots (duration, lift, elbow) that the env's rate limit turns into ramps. The
 score is the ball's apex after it leaves the cup, less 10 per metre the cup's throat rises above
-``--max-cup`` (0.76 m: a counted throw rises at least 0.24 m above the cup). It prints the best
+``--max-cup`` (0.76 m: a counted throw rises at least 0.24 m above the cup) and, with
+``--landing-weight W``, W per metre the ball comes down from the start cup. It prints the best
 throw, its apex, the cup's highest point, the peak joint speeds and how far from the start the
 ball comes down (where a catch would have to be).
 
-    python scripts/earth_throw.py [--restarts 12] [--generations 60] [--seed 1]
+    python scripts/earth_throw.py [--restarts 12] [--generations 60] [--seed 1] [--landing-weight 0]
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ SPEED_LIMIT = np.pi  # rad/s (configs/env/earth.yaml)
 UPRIGHT = (-1.5708, 2.0, -2.0)  # lift, elbow, wrist_1: the cup upright (policies/expert.yaml)
 KNOTS = 3
 SETTLE = 0.6  # s at the start pose before the throw
-FLIGHT = 1.2  # s simulated after the last knot starts
+FLIGHT = 1.2  # s simulated after the last knot ends
 MAX_KNOT = 0.6  # s, the longest a knot lasts
 LIFT, ELBOW = (-np.pi, 0.0), (0.0, np.pi)  # the servos' control ranges (rad)
 
@@ -101,13 +102,16 @@ def simulate(x: np.ndarray, env: JuggleEnv | None = None) -> Throw | None:
     )
 
 
-def score(throw: Throw | None, max_cup: float) -> float:
+def score(throw: Throw | None, max_cup: float, landing_weight: float = 0.0) -> float:
     if throw is None:
         return -1.0
-    return throw.apex - 10.0 * max(0.0, throw.max_cup - max_cup)
+    value = throw.apex - 10.0 * max(0.0, throw.max_cup - max_cup)
+    if landing_weight > 0:  # a ball that never comes back down past the cup is 1 m off
+        value -= landing_weight * min(throw.landing_offset, 1.0)
+    return value
 
 
-def search(restarts: int, generations: int, seed: int, max_cup: float):
+def search(restarts: int, generations: int, seed: int, max_cup: float, landing_weight: float):
     """CMA-ES restarts from random start poses; the best vector and its throw."""
     rng = np.random.default_rng(seed)
     env = earth_env()
@@ -121,12 +125,12 @@ def search(restarts: int, generations: int, seed: int, max_cup: float):
             told = []
             for _ in range(es.population_size):
                 x = es.ask()
-                value = score(simulate(x, env), max_cup)
+                value = score(simulate(x, env), max_cup, landing_weight)
                 told.append((x, -value))
                 if value > best_score:
                     best_x, best_score = x, value
             es.tell(told)
-        print(f"restart {restart + 1}/{restarts}: best apex so far {best_score:.3f} m", flush=True)
+        print(f"restart {restart + 1}/{restarts}: best score so far {best_score:.3f}", flush=True)
     return best_x, simulate(best_x, env)
 
 
@@ -136,10 +140,15 @@ def main() -> None:
     parser.add_argument("--generations", type=int, default=60)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--max-cup", type=float, default=0.76, help="m, the cup's highest allowed")
+    parser.add_argument("--landing-weight", type=float, default=0.0,
+                        help="score lost per metre the ball lands from the start cup")
     args = parser.parse_args()
     if args.restarts < 1 or args.generations < 1:
         parser.error("--restarts and --generations must be >= 1")
-    x, throw = search(args.restarts, args.generations, args.seed, args.max_cup)
+    if args.landing_weight < 0:
+        parser.error("--landing-weight must be >= 0")
+    x, throw = search(args.restarts, args.generations, args.seed, args.max_cup,
+                      args.landing_weight)
     start, tilt, knots = decode(x)
     print(f"start pose (lift, elbow) {np.round(start, 3).tolist()} rad, cup tilt {tilt:+.3f} rad")
     for duration, lift, elbow in knots:

@@ -5,6 +5,7 @@ import math
 import sys
 
 import numpy as np
+import pytest
 from cli import ROOT, run_script
 
 spec = importlib.util.spec_from_file_location("earth_throw", ROOT / "scripts" / "earth_throw.py")
@@ -41,3 +42,13 @@ def test_a_short_search_prints_its_throw_and_bad_budgets_are_one_error_line():
     assert last.startswith("apex ") and "peak joint speeds" in last
     bad = run_script("earth_throw.py", "--restarts", "0")
     assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith("must be >= 1")
+    bad = run_script("earth_throw.py", "--landing-weight", "-1")
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith("must be >= 0")
+
+
+def test_the_score_is_the_apex_less_the_cup_overshoot_and_the_weighted_landing_distance():
+    throw = earth_throw.Throw(apex=1.2, max_cup=0.8, peak_speed=(0.0, 1.0, 1.0),
+                              landing_offset=0.3, throws=1)
+    assert earth_throw.score(throw, max_cup=0.76) == pytest.approx(1.2 - 0.4)
+    assert earth_throw.score(throw, 0.76, landing_weight=2.0) == pytest.approx(1.2 - 0.4 - 0.6)
+    assert earth_throw.score(None, 0.76) == -1.0
