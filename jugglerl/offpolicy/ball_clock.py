@@ -81,18 +81,19 @@ class BallClock(Transform):
 
     forward = _call
 
+    def _carry(self, source: TensorDictBase | None, target: TensorDictBase) -> TensorDictBase:
+        """``target`` with the memory ``source`` holds (none on a first reset)."""
+        for key in self.carried_keys:
+            if source is not None and key in source:
+                target.set(key, source.get(key))
+        return target
+
     def _step(self, tensordict: TensorDictBase, next_tensordict: TensorDictBase):
-        for key in self.carried_keys:  # the memory of this step, for the next one
-            if key in tensordict:
-                next_tensordict.set(key, tensordict.get(key))
-        return self._call(next_tensordict)
+        return self._call(self._carry(tensordict, next_tensordict))  # this step's, for the next
 
     def _reset(self, tensordict: TensorDictBase, tensordict_reset: TensorDictBase):
-        if tensordict is not None:  # envs that do not reset keep their memory
-            for key in self.carried_keys:
-                if key in tensordict:
-                    tensordict_reset.set(key, tensordict.get(key))
-        return self._call(tensordict_reset)
+        # envs that do not reset keep their memory; those that do restart it (``is_init``)
+        return self._call(self._carry(tensordict, tensordict_reset))
 
     def transform_observation_spec(self, observation_spec):
         spec = observation_spec["state"]
