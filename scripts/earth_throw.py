@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from cmaes import CMA
+from omegaconf import OmegaConf
 
 from jugglerl_envs import JuggleEnv
 from jugglerl_envs.actions import ctrl_to_action
 
-GRAVITY = -9.81
-SPEED_LIMIT = np.pi  # rad/s (configs/env/earth.yaml)
+EARTH = OmegaConf.load(Path(__file__).resolve().parents[1] / "configs" / "env" / "earth.yaml")
+GRAVITY, SPEED_LIMIT = EARTH.gravity, EARTH.joint_speed_limit  # m/s², rad/s; the rest as paper
 UPRIGHT = (-1.5708, 2.0, -2.0)  # lift, elbow, wrist_1: the cup upright (policies/expert.yaml)
 KNOTS = 3
 SETTLE = 0.6  # s at the start pose before the throw
