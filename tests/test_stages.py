@@ -29,7 +29,11 @@ STAGED = [
 
 
 def test_the_apprentice_stages_clone_then_dagger_then_rl():
-    bc, dagger, rl = stages_from_config(train_config("algo=apprentice"))
+    default = stages_from_config(train_config("algo=apprentice"))
+    assert [(s.name, s.end) for s in default] == [("bc", 327680), ("dagger", 368640)]
+    bc, dagger, rl = stages_from_config(
+        train_config("algo=apprentice", "collector.total_frames=491520")
+    )
     assert [s.name for s in (bc, dagger, rl)] == ["bc", "dagger", "rl"]
     assert (bc.start, bc.end, dagger.end, rl.end) == (0, 327680, 368640, 491520)
     assert bc.cfg.algo.loss == dagger.cfg.algo.loss == "bc" and rl.cfg.algo.loss == "ddpg"
@@ -38,12 +42,15 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0.25
     assert rl.cfg.algo.bc_weight == 100.0 and rl.bc_weight_at(rl.end) == pytest.approx(10.0)
     assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(55.0)
-    assert bc.cfg.optim.lr_actor == 1e-3 and rl.cfg.optim.lr_actor == 1e-4
-    assert bc.cfg.optim.updates_per_batch == dagger.cfg.optim.updates_per_batch == 32
+    assert bc.cfg.optim.lr_actor == 1e-3
+    assert dagger.cfg.optim.lr_actor == rl.cfg.optim.lr_actor == 1e-4
+    assert bc.cfg.optim.updates_per_batch == 128 and dagger.cfg.optim.updates_per_batch == 32
     assert rl.cfg.optim.updates_per_batch == 256 and rl.cfg.algo.bc_tau == 0.001
     assert rl.actor_frozen(rl.start + 10240) and not rl.actor_frozen(rl.start + 10241)
     assert (
-        stages_from_config(train_config("algo=apprentice", "algo.loss=td3"))[2].cfg.algo.loss
+        stages_from_config(
+            train_config("algo=apprentice", "algo.loss=td3", "collector.total_frames=491520")
+        )[2].cfg.algo.loss
         == "td3"
     )
     short = stages_from_config(train_config("algo=apprentice", "collector.total_frames=340000"))
@@ -67,7 +74,9 @@ def test_a_run_without_stages_is_one_stage_of_its_loss():
 )
 def test_bad_stage_settings_are_named(override, message):
     with pytest.raises(ValueError, match=re.escape(message)):
-        stages_from_config(train_config("algo=apprentice", override))
+        stages_from_config(
+            train_config("algo=apprentice", "collector.total_frames=491520", override)
+        )
 
 
 def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_stage(tmp_path):

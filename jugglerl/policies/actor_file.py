@@ -1,0 +1,49 @@
+"""Actor policy files (``kind: actor``): a trained network shipped by name, without its run.
+
+A policy file ``NAME.yaml`` with ``kind: actor`` names a weights file beside it (``weights:
+NAME.pt``) that holds what ``ActorPolicy`` needs and nothing of the training: the actor and state
+config, the deployed weights and the observation normalisation (a few hundred kB, where the run's
+``checkpoint.pt`` also carries critics, optimisers and history). ``scripts/ship_actor.py`` writes
+the pair from a run; ``policy=NAME`` then loads it like any shipped policy.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+
+from jugglerl.commands import CommandError
+
+#: The parts of a run's config an actor policy needs (``ActorPolicy.from_config``).
+CONFIG_KEYS = ("actor", "state", "env")
+
+
+def actor_policy_from_dict(data: dict, source: str):
+    """The ``ActorPolicy`` of a ``kind: actor`` file read from ``source``."""
+    import torch  # only actor files need it
+
+    from jugglerl.policies.actor import ActorPolicy
+
+    if "weights" not in data:
+        raise CommandError(f"{source}: a kind: actor file needs 'weights: FILE.pt'")
+    path = Path(source).parent / data["weights"]
+    if not path.is_file():
+        raise CommandError(f"{source}: no weights file at {path}")
+    return ActorPolicy.from_state(torch.load(path, weights_only=False))
+
+
+def write_actor_policy(state: dict, folder: Path, name: str, header: str) -> Path:
+    """``folder/name.yaml`` (``header`` as its comment) and ``folder/name.pt`` from a training
+    checkpoint's ``state`` (its deployed actor); returns the YAML's path."""
+    import torch
+
+    config = {key: state["config"][key] for key in CONFIG_KEYS}
+    weights = {"config": config, "policy": state["policy"], "normalisation": state["normalisation"]}
+    folder.mkdir(parents=True, exist_ok=True)
+    torch.save(weights, folder / f"{name}.pt")
+    comment = "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
+    body = yaml.safe_dump({"kind": "actor", "weights": f"{name}.pt"}, sort_keys=False)
+    path = folder / f"{name}.yaml"
+    path.write_text(comment + body)
+    return path

@@ -1,0 +1,64 @@
+"""Neural policies shipped by name (``kind: actor`` files): the shipped ``lstm_juggler`` juggles
+on its own, and ``scripts/ship_actor.py`` writes a file that deploys what its run deploys."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from cli import train_config
+from omegaconf import OmegaConf
+
+import jugglerl.policies.feedback as feedback
+from jugglerl.config import make_juggle_env
+from jugglerl.evaluation import run_episode
+from jugglerl.offpolicy.actors import build_actor
+from jugglerl.offpolicy.env_stack import ACTION_SIZE, state_size
+from jugglerl.policies.actor import ActorPolicy
+from jugglerl.policies.actor_file import write_actor_policy
+from jugglerl.policies.loading import load_policy
+
+
+def test_lstm_juggler_juggles_by_name_with_no_feedback_policy_built(monkeypatch):
+    built = []
+    real_init = feedback.FeedbackPolicy.__init__
+
+    def counting_init(self, *args, **kwargs):
+        built.append(self)
+        real_init(self, *args, **kwargs)
+
+    monkeypatch.setattr(feedback.FeedbackPolicy, "__init__", counting_init)
+    env = make_juggle_env(train_config().env, duration=120.0)
+    policy = load_policy("lstm_juggler", env)
+    assert isinstance(policy, ActorPolicy)
+    episode = run_episode(env, policy, seed=0)
+    env.close()
+    assert not built, "a FeedbackPolicy was built: the shipped network must act alone"
+    assert episode.throws >= 39 and episode.max_cup_height <= 0.76
+
+
+def test_a_shipped_actor_file_acts_as_the_run_it_came_from(tmp_path):
+    cfg = train_config("algo=bc", "actor=lstm", "state.ball_clock=true")
+    torch.manual_seed(0)
+    actor = build_actor(cfg.actor, state_size(cfg.state), ACTION_SIZE)
+    state = {
+        "config": OmegaConf.to_container(cfg, resolve=True),
+        "policy": actor.state_dict(),
+        "normalisation": {"loc": torch.rand(18), "scale": 1 + torch.rand(18)},
+    }
+    path = write_actor_policy(state, tmp_path, "student", "trained here\n\nfor a test")
+    assert path.read_text().startswith("# trained here\n#\n# for a test\nkind: actor\n")
+    env = make_juggle_env(train_config().env, duration=2.0)
+    shipped, original = load_policy(str(path), env), ActorPolicy.from_state(state)
+    observation, info = env.reset(seed=0)
+    for _ in range(20):  # the recurrent and ball-clock memories carried alike
+        action = shipped.act(observation, info["time"])
+        np.testing.assert_array_equal(action, original.act(observation, info["time"]))
+        observation, *_, info = env.step(action)
+    env.close()
+
+
+def test_an_actor_file_without_its_weights_is_a_one_line_error(tmp_path):
+    (tmp_path / "lost.yaml").write_text("kind: actor\nweights: lost.pt\n")
+    with make_juggle_env(train_config().env) as env, pytest.raises(ValueError, match="no weights"):
+        load_policy(str(tmp_path / "lost.yaml"), env)
