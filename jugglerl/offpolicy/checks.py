@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from omegaconf import DictConfig
 
+from jugglerl.config import make_juggle_env
 from jugglerl.offpolicy.actors import recurrent_state
+from jugglerl.offpolicy.evaluation import perturbed_conditions
 
 
 def check_config(cfg: DictConfig) -> None:
-    """Raise ``ValueError`` naming the keys of a budget or buffer that cannot work."""
+    """Raise ``ValueError`` naming the keys of a budget, buffer or evaluation that cannot work."""
     collect = cfg.collector
     if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:
         raise ValueError(
@@ -33,3 +35,14 @@ def check_config(cfg: DictConfig) -> None:
             f"eval.seeds={cfg.eval.seeds} must be >= 1 and eval.duration={cfg.eval.duration}"
             f" at least eval.catch_time={cfg.eval.catch_time}"
         )
+    check, conditions = cfg.eval, perturbed_conditions(cfg)
+    if conditions and (check.perturbed_seeds < 1 or check.perturbed_duration <= 0):
+        raise ValueError(
+            f"eval.perturbed_seeds={check.perturbed_seeds} must be >= 1 and"
+            f" eval.perturbed_duration={check.perturbed_duration} > 0"
+        )
+    for name, overrides in conditions.items():  # fail now, not at the first evaluation
+        try:
+            make_juggle_env(cfg.env, **overrides).close()
+        except (ValueError, TypeError) as error:
+            raise ValueError(f"eval.perturbed.{name}: {error}") from None

@@ -1,16 +1,23 @@
 """Periodic evaluation of the trained actor, and the choice of the actor a run deploys.
 
 ``Evaluations`` runs ``eval.seeds`` deterministic episodes of an actor from env seeds
-``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``), keeps every
-evaluation's record, and with ``eval.keep_best`` the weights of the best one (catch rate, then
-throws, then time up; a tie goes to the later one), which the run then deploys instead of its
-last actor.
+``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``), and with
+``eval.perturbed`` (name: env arguments) ``eval.perturbed_seeds`` episodes of
+``eval.perturbed_duration`` s under each of those conditions, from env seeds
+``eval.perturbed_first_seed`` on: away from the seeds ``scripts/robustness.py`` measures on, so
+that a run is not selected on its benchmark. It keeps every evaluation's record, and with
+``eval.keep_best`` the weights of the best one, which the run then deploys instead of its last
+actor. An evaluation's score is its catch rate, then throws, then time up (a tie goes to the
+later one), each averaged over the nominal episodes and the perturbed conditions, a condition's
+throws and time scaled to the nominal episode's length: an actor that juggles only the nominal
+episode ranks below one that also juggles through noise and kicks.
 """
 
 from __future__ import annotations
 
 import copy
 
+import numpy as np
 from omegaconf import DictConfig
 
 from jugglerl.config import make_juggle_env
@@ -51,18 +58,37 @@ class Evaluations:
         summary = summarise_episodes(episodes, check.catch_time)
         record = {"frames": frames, "duration": duration, **summary}
         record["episodes"] = [episode.to_dict() for episode in episodes]
+        metrics = {join(EVAL, key): value for key, value in summary.items()}
+        conditions = perturbed_conditions(self.cfg)
+        if conditions:
+            record["perturbed"] = {}
+            for name, overrides in conditions.items():
+                perturbed = self._perturbed_summary(policy, overrides)
+                record["perturbed"][name] = perturbed
+                metrics |= {join(EVAL, name, key): value for key, value in perturbed.items()}
         self.records.append(record)
-        logger.log_metrics({join(EVAL, key): value for key, value in summary.items()}, frames)
+        logger.log_metrics(metrics, frames)
         return record
+
+    def _perturbed_summary(self, policy: ActorPolicy, overrides) -> dict:
+        """Summary of ``eval.perturbed_seeds`` episodes in the env with ``overrides``."""
+        check = self.cfg.eval
+        duration = check.perturbed_duration
+        env = make_juggle_env(self.cfg.env, duration=duration, **overrides)
+        first = check.perturbed_first_seed
+        seeds = range(first, first + check.perturbed_seeds)
+        episodes = [run_episode(env, policy, seed=seed) for seed in seeds]
+        env.close()
+        return {"duration": duration, **summarise_episodes(episodes, check.catch_time)}
 
     def keep_if_best(self, record: dict, actor) -> None:
         """With ``eval.keep_best``, keep ``actor``'s weights if ``record`` is the best so far."""
         if not self.cfg.eval.keep_best:
             return
-        score = [record["catch_rate"], record["mean_throws"], record["mean_time_to_drop"]]
-        if self.best is None or score >= self.best["score"]:
+        ranked = score(record)
+        if self.best is None or ranked >= self.best["score"]:
             weights = copy.deepcopy(actor.state_dict())
-            self.best = {"frames": record["frames"], "score": score, "policy": weights}
+            self.best = {"frames": record["frames"], "score": ranked, "policy": weights}
 
     def deployed(self, actor):
         """``actor``, or with a kept best, a copy of it carrying the best weights."""
@@ -78,3 +104,24 @@ class Evaluations:
     def load_state_dict(self, state: dict) -> None:
         self.records = list(state["evaluations"])
         self.best = state["best"]
+
+
+def perturbed_conditions(cfg: DictConfig) -> dict:
+    """``eval.perturbed``: condition name -> env arguments; none when the key is deleted
+    (``~eval.perturbed``) or empty."""
+    return dict(cfg.eval.get("perturbed") or {})
+
+
+SCORE_KEYS = ("catch_rate", "mean_throws", "mean_time_to_drop")
+
+
+def score(record: dict) -> list[float]:
+    """What ``keep_best`` ranks (compared as a list): catch rate, throws and time up, each the
+    mean over the nominal summary and every perturbed condition's, whose throws and time up
+    count as in an episode of the nominal length (``record["duration"]``)."""
+    rows = [[record[key] for key in SCORE_KEYS]]
+    for summary in record.get("perturbed", {}).values():
+        stretch = record["duration"] / summary["duration"]
+        rate, throws, time_up = (summary[key] for key in SCORE_KEYS)
+        rows.append([rate, throws * stretch, time_up * stretch])
+    return [float(value) for value in np.mean(rows, axis=0)]

@@ -1,0 +1,79 @@
+"""The periodic evaluation's perturbed conditions (``eval.perturbed``) and the score that
+``eval.keep_best`` ranks."""
+
+import pytest
+from cli import train_config
+
+from jugglerl.config import make_juggle_env
+from jugglerl.evaluation import run_episode, summarise_episodes
+from jugglerl.offpolicy.checks import check_config
+from jugglerl.offpolicy.evaluation import Evaluations, score
+from jugglerl.policies.loading import load_policy
+from jugglerl.recording.logger import RerunLogger
+
+
+def test_perturbed_conditions_run_their_own_episodes_and_enter_the_score(tmp_path):
+    cfg = train_config(
+        "~eval.perturbed",  # in place of algo=apprentice's conditions
+        "+eval.perturbed.shaky={action_noise:0.05}",
+        "eval.seeds=1",
+        "eval.catch_time=1",
+        "eval.record=false",
+        "eval.perturbed_seeds=2",
+        "eval.perturbed_duration=6",
+    )
+    env = make_juggle_env(cfg.env, duration=12.0)
+    expert = load_policy("expert", env)  # juggles; noise of 0.05 breaks its throws
+    evaluations = Evaluations(cfg)
+    with RerunLogger.from_config(cfg.logger, tmp_path) as logger:
+        record = evaluations.evaluate(expert, 0, logger, 12.0)
+
+    shaky_env = make_juggle_env(cfg.env, duration=6.0, action_noise=0.05)
+    by_hand = [run_episode(shaky_env, expert, seed=seed) for seed in (1000, 1001)]
+    shaky = record["perturbed"]["shaky"]
+    assert shaky == {"duration": 6.0, **summarise_episodes(by_hand, 1.0)}
+    assert record["mean_throws"] >= 4 and shaky["mean_throws"] < record["mean_throws"] / 2
+    # the 6-s condition's throws and time up count double against the 12-s nominal episode
+    expected = [
+        (record["catch_rate"] + shaky["catch_rate"]) / 2,
+        (record["mean_throws"] + 2 * shaky["mean_throws"]) / 2,
+        (record["mean_time_to_drop"] + 2 * shaky["mean_time_to_drop"]) / 2,
+    ]
+    assert score(record) == pytest.approx(expected)
+
+
+def test_keep_best_prefers_the_actor_that_also_juggles_perturbed(tmp_path):
+    cfg = train_config("eval.keep_best=true")
+    evaluations = Evaluations(cfg)
+
+    def summary(throws):
+        return {
+            "duration": 120.0,
+            "catch_rate": 1.0,
+            "mean_throws": throws,
+            "mean_time_to_drop": 120.0,
+        }
+
+    fragile = {"frames": 1, **summary(54.0), "perturbed": {"noise": summary(10.0)}}
+    tolerant = {"frames": 2, **summary(50.0), "perturbed": {"noise": summary(45.0)}}
+    evaluations.keep_if_best(tolerant, _Weights(2))
+    evaluations.keep_if_best(fragile, _Weights(1))  # later but worse on average: not kept
+    assert evaluations.best["frames"] == 2
+    assert evaluations.best["score"] == [1.0, 47.5, 120.0]
+    assert score(summary(54.0)) == [1.0, 54.0, 120.0]  # no conditions: the nominal summary
+
+
+def test_a_perturbed_condition_the_env_does_not_know_is_refused_before_training():
+    cfg = train_config("+eval.perturbed.windy={gust:1.0}")
+    with pytest.raises(ValueError, match="eval.perturbed.windy: env config: .*gust"):
+        check_config(cfg)
+
+
+class _Weights:
+    """Stands in for an actor: ``keep_if_best`` only copies its ``state_dict``."""
+
+    def __init__(self, tag: int):
+        self.tag = tag
+
+    def state_dict(self) -> dict:
+        return {"tag": self.tag}
