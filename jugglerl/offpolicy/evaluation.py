@@ -65,7 +65,7 @@ class Evaluations:
             for name, overrides in conditions.items():
                 perturbed = self._perturbed_summary(policy, overrides)
                 record["perturbed"][name] = perturbed
-                metrics |= {join(EVAL, name, key): value for key, value in perturbed.items()}
+                metrics |= {join(EVAL, name, key): perturbed[key] for key in summary}
         self.records.append(record)
         logger.log_metrics(metrics, frames)
         return record
