@@ -39,7 +39,8 @@ class Evaluations:
         self.best: dict | None = None
 
     def evaluate(self, policy: ActorPolicy, frames: int, logger: RerunLogger, duration: float):
-        """Deterministic episodes of ``policy`` of ``duration`` s; returns their record."""
+        """Deterministic episodes of ``policy`` of ``duration`` s, and the perturbed ones;
+        returns their record."""
         check = self.cfg.eval
         seeds = list(range(check.seeds))
         root = join(EVAL, f"{frames:08d}")
