@@ -33,9 +33,10 @@ def test_perturbed_conditions_run_their_own_episodes_and_enter_the_score(tmp_pat
     shaky = record["perturbed"]["shaky"]
     assert shaky == {"duration": 6.0, **summarise_episodes(by_hand, 1.0)}
     assert record["mean_throws"] >= 4 and shaky["mean_throws"] < record["mean_throws"] / 2
-    # the 6-s condition's throws and time up count double against the 12-s nominal episode
+    # the nominal catch rate first; the 6-s condition's throws and time up count double
+    # against the 12-s nominal episode
     expected = [
-        (record["catch_rate"] + shaky["catch_rate"]) / 2,
+        record["catch_rate"],
         (record["mean_throws"] + 2 * shaky["mean_throws"]) / 2,
         (record["mean_time_to_drop"] + 2 * shaky["mean_time_to_drop"]) / 2,
     ]
@@ -61,6 +62,28 @@ def test_keep_best_prefers_the_actor_that_also_juggles_perturbed(tmp_path):
     assert evaluations.best["frames"] == 2
     assert evaluations.best["score"] == [1.0, 47.5, 120.0]
     assert score(summary(54.0)) == [1.0, 54.0, 120.0]  # no conditions: the nominal summary
+
+
+def test_keep_best_ranks_the_nominal_catch_first():
+    """Lucky perturbed draws do not lift an actor that drops the ball from the standard start."""
+    evaluations = Evaluations(train_config("eval.keep_best=true"))
+
+    def summary(caught, throws):
+        return {
+            "duration": 120.0,
+            "catch_rate": caught,
+            "mean_throws": throws,
+            "mean_time_to_drop": 120.0 if caught else 3.0,
+        }
+
+    juggles = {"frames": 1, **summary(1.0, 46.0)}
+    juggles["perturbed"] = {"noise": summary(0.0, 1.0), "kicks": summary(0.0, 1.0)}
+    dropped = {"frames": 2, **summary(0.0, 1.0)}
+    dropped["perturbed"] = {"noise": summary(1.0, 50.0), "kicks": summary(1.0, 50.0)}
+    evaluations.keep_if_best(juggles, _Weights(1))
+    evaluations.keep_if_best(dropped, _Weights(2))
+    assert evaluations.best["frames"] == 1
+    assert score(dropped)[1] > score(juggles)[1]  # it would win on throws alone
 
 
 def test_a_perturbed_condition_the_env_does_not_know_is_refused_before_training():
