@@ -44,42 +44,26 @@ def test_perturbed_conditions_run_their_own_episodes_and_enter_the_score(tmp_pat
 
 
 def test_keep_best_prefers_the_actor_that_also_juggles_perturbed(tmp_path):
-    cfg = train_config("eval.keep_best=true")
-    evaluations = Evaluations(cfg)
-
-    def summary(throws):
-        return {
-            "duration": 120.0,
-            "catch_rate": 1.0,
-            "mean_throws": throws,
-            "mean_time_to_drop": 120.0,
-        }
-
-    fragile = {"frames": 1, **summary(54.0), "perturbed": {"noise": summary(10.0)}}
-    tolerant = {"frames": 2, **summary(50.0), "perturbed": {"noise": summary(45.0)}}
+    evaluations = Evaluations(train_config("eval.keep_best=true"))
+    fragile = {"frames": 1, **_summary(54.0), "perturbed": {"noise": _summary(10.0)}}
+    tolerant = {"frames": 2, **_summary(50.0), "perturbed": {"noise": _summary(45.0)}}
     evaluations.keep_if_best(tolerant, _Weights(2))
     evaluations.keep_if_best(fragile, _Weights(1))  # later but worse on average: not kept
     assert evaluations.best["frames"] == 2
     assert evaluations.best["score"] == [1.0, 47.5, 120.0]
-    assert score(summary(54.0)) == [1.0, 54.0, 120.0]  # no conditions: the nominal summary
+    assert score(_summary(54.0)) == [1.0, 54.0, 120.0]  # no conditions: the nominal summary
 
 
 def test_keep_best_ranks_the_nominal_catch_first():
     """Lucky perturbed draws do not lift an actor that drops the ball from the standard start."""
     evaluations = Evaluations(train_config("eval.keep_best=true"))
-
-    def summary(caught, throws):
-        return {
-            "duration": 120.0,
-            "catch_rate": caught,
-            "mean_throws": throws,
-            "mean_time_to_drop": 120.0 if caught else 3.0,
-        }
-
-    juggles = {"frames": 1, **summary(1.0, 46.0)}
-    juggles["perturbed"] = {"noise": summary(0.0, 1.0), "kicks": summary(0.0, 1.0)}
-    dropped = {"frames": 2, **summary(0.0, 1.0)}
-    dropped["perturbed"] = {"noise": summary(1.0, 50.0), "kicks": summary(1.0, 50.0)}
+    juggles = {"frames": 1, **_summary(46.0)}
+    juggles["perturbed"] = {
+        "noise": _summary(1.0, caught=False),
+        "kicks": _summary(1.0, caught=False),
+    }
+    dropped = {"frames": 2, **_summary(1.0, caught=False)}
+    dropped["perturbed"] = {"noise": _summary(50.0), "kicks": _summary(50.0)}
     evaluations.keep_if_best(juggles, _Weights(1))
     evaluations.keep_if_best(dropped, _Weights(2))
     assert evaluations.best["frames"] == 1
@@ -90,6 +74,16 @@ def test_a_perturbed_condition_the_env_does_not_know_is_refused_before_training(
     cfg = train_config("+eval.perturbed.windy={gust:1.0}")
     with pytest.raises(ValueError, match="eval.perturbed.windy: env config: .*gust"):
         check_config(cfg)
+
+
+def _summary(throws: float, caught: bool = True) -> dict:
+    """An evaluation summary of 120-s episodes: caught and up throughout, or dropped at 3 s."""
+    return {
+        "duration": 120.0,
+        "catch_rate": 1.0 if caught else 0.0,
+        "mean_throws": throws,
+        "mean_time_to_drop": 120.0 if caught else 3.0,
+    }
 
 
 class _Weights:
