@@ -43,6 +43,27 @@ def test_perturbed_conditions_run_their_own_episodes_and_enter_the_score(tmp_pat
     assert score(record) == pytest.approx(expected)
 
 
+def test_a_condition_with_its_own_duration_runs_episodes_that_long(tmp_path):
+    cfg = train_config(
+        "~eval.perturbed",
+        "+eval.perturbed.short={action_noise:0.05}",
+        "+eval.perturbed.long={action_noise:0.05,duration:9}",
+        "eval.seeds=1",
+        "eval.catch_time=1",
+        "eval.record=false",
+        "eval.perturbed_duration=3",
+    )
+    env = make_juggle_env(cfg.env, duration=12.0)
+    expert = load_policy("expert", env)
+    with RerunLogger.from_config(cfg.logger, tmp_path) as logger:
+        record = Evaluations(cfg).evaluate(expert, 0, logger, 12.0)
+
+    long_env = make_juggle_env(cfg.env, duration=9.0, action_noise=0.05)
+    by_hand = summarise_episodes([run_episode(long_env, expert, seed=1000)], 1.0)
+    assert record["perturbed"]["long"] == {"duration": 9.0, **by_hand}
+    assert record["perturbed"]["short"]["duration"] == 3.0
+
+
 def test_keep_best_prefers_the_actor_that_also_juggles_perturbed(tmp_path):
     evaluations = Evaluations(train_config("eval.keep_best=true"))
     fragile = {"frames": 1, **_summary(54.0), "perturbed": {"noise": _summary(10.0)}}

@@ -3,15 +3,15 @@
 ``Evaluations`` runs ``eval.seeds`` deterministic episodes of an actor from env seeds
 ``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``), and with
 ``eval.perturbed`` (name: env arguments) ``eval.perturbed_seeds`` episodes of
-``eval.perturbed_duration`` s under each of those conditions, from env seeds
-``eval.perturbed_first_seed`` on: away from the seeds ``scripts/robustness.py`` measures on, so
-that a run is not selected on its benchmark. It keeps every evaluation's record, and with
-``eval.keep_best`` the weights of the best one, which the run then deploys instead of its last
-actor. An evaluation's score is the nominal episodes' catch rate (an actor must catch the ball
-from the standard start), then throws, then time up, each averaged over the nominal episodes and
-the perturbed conditions, a condition's throws and time scaled to the nominal episode's length
-(a tie goes to the later one): an actor that juggles only the nominal episode ranks below one
-that also juggles through noise and kicks.
+``eval.perturbed_duration`` s (or the condition's own ``duration``) under each of those
+conditions, from env seeds ``eval.perturbed_first_seed`` on: away from the seeds
+``scripts/robustness.py`` measures on, so that a run is not selected on its benchmark. It keeps
+every evaluation's record, and with ``eval.keep_best`` the weights of the best one, which the run
+then deploys instead of its last actor. An evaluation's score is the nominal episodes' catch rate
+(an actor must catch the ball from the standard start), then throws, then time up, each averaged
+over the nominal episodes and the perturbed conditions, a condition's throws and time scaled to
+the nominal episode's length (a tie goes to the later one): an actor that juggles only the
+nominal episode ranks below one that also juggles through noise and kicks.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode, summarise_episodes
 from jugglerl.policies.actor import ActorPolicy
-from jugglerl.recording.blueprint import OFFPOLICY_CURVES, training_blueprint
+from jugglerl.recording.blueprint import offpolicy_curves, training_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import EVAL, join
@@ -52,7 +52,8 @@ class Evaluations:
                 recorded = make_juggle_env(self.cfg.env, duration=duration)
                 stream, fps = logger.recording, self.cfg.logger.scene_fps
                 episodes.append(record_episode(recorded, policy, stream, root, seed, fps))
-                blueprint = training_blueprint(OFFPOLICY_CURVES, root, self.cfg.env.threshold)
+                curves = offpolicy_curves(perturbed_conditions(self.cfg))
+                blueprint = training_blueprint(curves, root, self.cfg.env.threshold)
                 logger.send_blueprint(blueprint)
             else:
                 episodes.append(run_episode(env, policy, seed=seed))
@@ -73,9 +74,11 @@ class Evaluations:
         return record
 
     def _perturbed_summary(self, policy: ActorPolicy, overrides) -> dict:
-        """Summary of ``eval.perturbed_seeds`` episodes in the env with ``overrides``."""
+        """Summary of ``eval.perturbed_seeds`` episodes in the env with ``overrides``, of their
+        ``duration`` if they name one, else of ``eval.perturbed_duration`` s."""
         check = self.cfg.eval
-        duration = check.perturbed_duration
+        overrides = dict(overrides)
+        duration = float(overrides.pop("duration", check.perturbed_duration))
         env = make_juggle_env(self.cfg.env, duration=duration, **overrides)
         first = check.perturbed_first_seed
         seeds = range(first, first + check.perturbed_seeds)
