@@ -12,7 +12,7 @@ import numpy as np
 from cli import run_script, run_train
 from viewer import opening_views, screenshot, shows, views_without_data
 
-from jugglerl.recording.blueprint import OFFPOLICY_CURVES, episode_blueprint, training_blueprint
+from jugglerl.recording.blueprint import episode_blueprint, offpolicy_curves, training_blueprint
 from jugglerl.recording.names import EVAL, SIM_TIME, STEP, TRAIN
 from jugglerl.recording.reading import entities
 
@@ -33,6 +33,8 @@ SHORT_DDPG = [
     "optim.updates_per_batch=4",
     "checkpoint_every_frames=256",
     "progress=false",
+    "+eval.perturbed.shaky={action_noise:0.01}",  # its throws get a panel of their own
+    "eval.perturbed_duration=1",
 ]
 
 
@@ -66,16 +68,20 @@ def test_an_evaluated_episode_opens_on_sim_time_with_every_view_showing_data(tmp
 def test_a_training_run_opens_on_its_learning_curves_with_every_view_showing_data(tmp_path):
     result = run_train(*SHORT_DDPG, f"hydra.run.dir={tmp_path}")
     assert result.returncode == 0, result.stderr
-    metrics = {name for name in entities(tmp_path / "train.rrd") if name.count("/") == 1}
-    views = opening_views(training_blueprint(OFFPOLICY_CURVES))
+    names = entities(tmp_path / "train.rrd")
+    metrics = {name for name in names if name.count("/") == 1}
+    metrics |= {name for name in names if name.startswith(f"{EVAL}/shaky/")}
+    blueprint = training_blueprint(offpolicy_curves(["shaky"]))
+    views = opening_views(blueprint)
     in_no_panel = {
         name
         for name in metrics
         if name.split("/")[0] in (TRAIN, EVAL) and not any(shows(view, name) for view in views)
     }
-    assert in_no_panel == {f"{TRAIN}/frames"}  # only the frame count, which is the step itself
-    state = check_opening(
-        tmp_path / "train.rrd", tmp_path / "train.png", training_blueprint(OFFPOLICY_CURVES), STEP
-    )
+    # only the frame count, which is the step itself, and the condition's other summaries
+    assert in_no_panel == {f"{TRAIN}/frames"} | {
+        f"{EVAL}/shaky/{key}" for key in ("catch_rate", "mean_catches", "mean_time_to_drop")
+    }
+    state = check_opening(tmp_path / "train.rrd", tmp_path / "train.png", blueprint, STEP)
     step = next(t for t in state["recordings"][0]["timelines"] if t["name"] == STEP)
     assert (step["start"], step["end"]) == (128, 256)  # the whole run is on the timeline

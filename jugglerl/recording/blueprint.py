@@ -89,6 +89,16 @@ OFFPOLICY_CURVES = (
     ),
 )
 
+
+def offpolicy_curves(conditions: Sequence[str] = ()) -> tuple[Curve, ...]:
+    """``OFFPOLICY_CURVES``, and with perturbed evaluation ``conditions`` (``eval.perturbed``'s
+    names) a panel of their throws next to the nominal evaluation's."""
+    if not conditions:
+        return OFFPOLICY_CURVES
+    throws = (f"{EVAL}/mean_throws", *(f"{EVAL}/{name}/mean_throws" for name in conditions))
+    return (*OFFPOLICY_CURVES, Curve("throws per evaluation episode, perturbed", throws))
+
+
 #: Search metrics of the roll-outs (``dps/*``: direct policy search and the feedback-gain search;
 #: step = roll-outs so far).
 SEARCH_THROWS = tuple(f"{DPS}/{name}" for name in ("best_throws", "max_throws", "mean_throws"))
