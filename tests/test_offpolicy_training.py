@@ -185,6 +185,7 @@ def test_ctrl_c_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
             "error: replay_buffer.slice_len=128 must be at most",
         ),
         ("+eval.perturbed.windy={gust:1}", "error: eval.perturbed.windy: env config:"),
+        ("state.observe=[ball,elbow]", "error: state.observe=['ball', 'elbow']: one or more"),
     ],
 )
 def test_a_bad_override_gives_a_clear_message(tmp_path, override, message):

@@ -7,6 +7,7 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.offpolicy.actors import recurrent_state
 from jugglerl.offpolicy.evaluation import perturbed_conditions
+from jugglerl.offpolicy.observation_parts import observed_parts
 
 
 def check_config(cfg: DictConfig) -> None:
@@ -22,6 +23,7 @@ def check_config(cfg: DictConfig) -> None:
             f"collector.total_frames={collect.total_frames} must be at least"
             f" collector.frames_per_batch={collect.frames_per_batch}"
         )
+    observed_parts(cfg.state)
     steps = collect.frames_per_batch // collect.num_envs
     if recurrent_state(cfg.actor) and cfg.replay_buffer.slice_len > steps:
         # the buffer stores each batch env by env: a trajectory's steps are contiguous only

@@ -10,6 +10,7 @@ input ``state`` beside them:
 | --- | --- |
 | ``RenameTransform`` | copies ``observation`` to ``state``, the networks' input |
 | ``DoubleToFloat`` | ``state`` to float32 (MuJoCo states are float64; the networks are float32) |
+| ``ObservationParts`` | keeps the parts of it ``state.observe`` names (default all six) |
 | ``StepCounter`` | ``step_count``: per-episode step index (the slice sampler reads it) |
 | ``InitTracker`` | ``is_init``: marks first steps, which reset LSTM states and OU noise |
 | ``RewardSum`` | ``episode_reward``: the return of the running episode |
@@ -18,10 +19,10 @@ input ``state`` beside them:
 | ``BallClock`` | appends the phase since the ball last fell past the cup (``state.ball_clock``) |
 | ``TensorDictPrimer`` | the actor's zero recurrent state on reset (recurrent actors only) |
 
-``state`` is therefore 18 normalised values plus, with the timestamp, ``1 + 2 harmonics`` time
-features and, with the ball clock, ``2 harmonics`` more (``state_size``). ``state_transforms``
-builds the copy, the cast, the normalisation, the time features and the ball clock on their
-own, so that a trained actor runs outside TorchRL
+``state`` is therefore 3 normalised values per observed part (18 for all six) plus, with the
+timestamp, ``1 + 2 harmonics`` time features and, with the ball clock, ``2 harmonics`` more
+(``state_size``). ``state_transforms`` builds the copy, the cast, the parts, the normalisation,
+the time features and the ball clock on their own, so that a trained actor runs outside TorchRL
 (``jugglerl.policies.actor.ActorPolicy``) on exactly the same inputs.
 """
 
@@ -47,13 +48,13 @@ from torchrl.envs.libs.gym import default_info_dict_reader
 
 from jugglerl.offpolicy.actors import primer
 from jugglerl.offpolicy.ball_clock import BallClock, num_ball_clock_features
+from jugglerl.offpolicy.observation_parts import PART_SIZE, ObservationParts, observed_parts
 from jugglerl.offpolicy.timestamp import TimestampFeatures, num_time_features
 from jugglerl_envs import ENV_ID
 
 #: The info entries training and evaluation read, all numeric (see ``NumericInfo``), and their
 #: dtypes in the tensordict.
 INFO_KEYS = {"throws": torch.int64, "catches": torch.int64, "time": torch.float64}
-OBSERVATION_SIZE = 18
 ACTION_SIZE = 3
 
 
@@ -107,24 +108,27 @@ def _harmonics(state_cfg: DictConfig) -> int:
 
 
 def state_size(state_cfg: DictConfig) -> int:
-    """Size of the networks' input ``state``: the observation and, optionally, time features
+    """Size of the networks' input ``state``: the observed parts and, optionally, time features
     and the ball clock."""
     harmonics = _harmonics(state_cfg)
-    size = OBSERVATION_SIZE + (num_time_features(harmonics) if state_cfg.timestamp else 0)
+    size = PART_SIZE * len(observed_parts(state_cfg))
+    size += num_time_features(harmonics) if state_cfg.timestamp else 0
     return size + (num_ball_clock_features(harmonics) if state_cfg.get("ball_clock") else 0)
 
 
 def state_transforms(
     state_cfg: DictConfig, duration: float, loc: torch.Tensor | None, scale: torch.Tensor | None
 ) -> list[Transform]:
-    """``state`` from the observation: copied, cast to float32, normalised and (with
-    ``state_cfg.timestamp``, ``state_cfg.ball_clock``) given the time features and the ball clock.
+    """``state`` from the observation: copied, cast to float32, cut to ``state.observe``'s parts,
+    normalised and (with ``state_cfg.timestamp``, ``state_cfg.ball_clock``) given the time
+    features and the ball clock.
 
     ``loc``/``scale`` of ``None`` leave the normalisation to be fitted by ``fit_normalisation``.
     """
     transforms: list[Transform] = [
         RenameTransform(["observation"], ["state"], create_copy=True),
         DoubleToFloat(in_keys=["state"]),
+        ObservationParts(observed_parts(state_cfg)),
         ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True),
     ]
     harmonics = _harmonics(state_cfg)
