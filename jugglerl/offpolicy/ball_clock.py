@@ -29,6 +29,7 @@ from tensordict import TensorDictBase
 from torchrl.data import Binary, Unbounded
 from torchrl.envs import Transform
 
+from jugglerl.offpolicy.state_spec import resized
 from jugglerl.offpolicy.timestamp import phase_features
 
 #: Observation indices (``jugglerl_envs.measurements``): ball z and vz, cup z and vz.
@@ -99,9 +100,7 @@ class BallClock(Transform):
         spec = observation_spec["state"]
         features = num_ball_clock_features(self.harmonics)
         batch = spec.shape[:-1]
-        observation_spec["state"] = Unbounded(
-            shape=(*batch, spec.shape[-1] + features), dtype=spec.dtype, device=spec.device
-        )
+        observation_spec["state"] = resized(spec, spec.shape[-1] + features)
         observation_spec[LOCK] = Unbounded(shape=batch, dtype=torch.float64, device=spec.device)
         observation_spec[ARMED] = Binary(shape=batch, dtype=torch.bool, device=spec.device)
         return observation_spec

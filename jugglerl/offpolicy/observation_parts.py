@@ -23,8 +23,9 @@ from collections.abc import Sequence
 
 import torch
 from tensordict import TensorDictBase
-from torchrl.data import Unbounded
 from torchrl.envs import Transform
+
+from jugglerl.offpolicy.state_spec import resized
 
 #: The observed parts: slices of the env's observation.
 OBSERVED = {
@@ -81,9 +82,5 @@ class ObservationParts(Transform):
 
     def transform_observation_spec(self, observation_spec):
         spec = observation_spec[self.key]
-        observation_spec[self.key] = Unbounded(
-            shape=(*spec.shape[:-1], PART_SIZE * len(self.parts)),
-            dtype=spec.dtype,
-            device=spec.device,
-        )
+        observation_spec[self.key] = resized(spec, PART_SIZE * len(self.parts))
         return observation_spec

@@ -24,8 +24,9 @@ import math
 
 import torch
 from tensordict import TensorDictBase
-from torchrl.data import Unbounded
 from torchrl.envs import Transform
+
+from jugglerl.offpolicy.state_spec import resized
 
 
 def num_time_features(harmonics: int) -> int:
@@ -88,9 +89,6 @@ class TimestampFeatures(Transform):
 
     def transform_observation_spec(self, observation_spec):
         spec = observation_spec[self.observation_key]
-        observation_spec[self.observation_key] = Unbounded(
-            shape=(*spec.shape[:-1], spec.shape[-1] + num_time_features(self.harmonics)),
-            dtype=spec.dtype,
-            device=spec.device,
-        )
+        size = spec.shape[-1] + num_time_features(self.harmonics)
+        observation_spec[self.observation_key] = resized(spec, size)
         return observation_spec
