@@ -35,6 +35,9 @@ class Evaluations:
 
     def __init__(self, cfg: DictConfig):
         self.cfg = cfg
+        self.conditions = perturbed_conditions(cfg)
+        #: the learning curves of ``train.rrd``: the perturbed conditions' throws among them
+        self.curves = offpolicy_curves(self.conditions)
         self.records: list[dict] = []
         #: with ``eval.keep_best``: frames, score and weights of the best periodic evaluation
         self.best: dict | None = None
@@ -43,29 +46,22 @@ class Evaluations:
         """Deterministic episodes of ``policy`` of ``duration`` s, and the perturbed ones;
         returns their record."""
         check = self.cfg.eval
-        seeds = list(range(check.seeds))
-        root = join(EVAL, f"{frames:08d}")
-        env = make_juggle_env(self.cfg.env, duration=duration)
+        seeds = range(check.seeds)
         episodes = []
-        for seed in seeds:
-            if check.record and not episodes:
-                recorded = make_juggle_env(self.cfg.env, duration=duration)
-                stream, fps = logger.recording, self.cfg.logger.scene_fps
-                episodes.append(record_episode(recorded, policy, stream, root, seed, fps))
-                curves = offpolicy_curves(perturbed_conditions(self.cfg))
-                blueprint = training_blueprint(curves, root, self.cfg.env.threshold)
-                logger.send_blueprint(blueprint)
-            else:
-                episodes.append(run_episode(env, policy, seed=seed))
-        env.close()
+        if check.record:  # the first episode, into the recording
+            root = join(EVAL, f"{frames:08d}")
+            recorded = make_juggle_env(self.cfg.env, duration=duration)
+            stream, fps = logger.recording, self.cfg.logger.scene_fps
+            episodes.append(record_episode(recorded, policy, stream, root, seeds[0], fps))
+            logger.send_blueprint(training_blueprint(self.curves, root, self.cfg.env.threshold))
+        episodes += self._episodes(policy, duration, seeds[len(episodes) :])
         summary = summarise_episodes(episodes, check.catch_time)
         record = {"frames": frames, "duration": duration, **summary}
         record["episodes"] = [episode.to_dict() for episode in episodes]
         metrics = {join(EVAL, key): value for key, value in summary.items()}
-        conditions = perturbed_conditions(self.cfg)
-        if conditions:
+        if self.conditions:
             record["perturbed"] = {}
-            for name, overrides in conditions.items():
+            for name, overrides in self.conditions.items():
                 perturbed = self._perturbed_summary(policy, overrides)
                 record["perturbed"][name] = perturbed
                 metrics |= {join(EVAL, name, key): perturbed[key] for key in summary}
@@ -79,12 +75,19 @@ class Evaluations:
         check = self.cfg.eval
         overrides = dict(overrides)
         duration = float(overrides.pop("duration", check.perturbed_duration))
-        env = make_juggle_env(self.cfg.env, duration=duration, **overrides)
         first = check.perturbed_first_seed
         seeds = range(first, first + check.perturbed_seeds)
+        episodes = self._episodes(policy, duration, seeds, **overrides)
+        return {"duration": duration, **summarise_episodes(episodes, check.catch_time)}
+
+    def _episodes(self, policy: ActorPolicy, duration: float, seeds, **overrides) -> list:
+        """``policy``'s episodes of ``duration`` s from ``seeds`` in the env with ``overrides``."""
+        if not seeds:
+            return []
+        env = make_juggle_env(self.cfg.env, duration=duration, **overrides)
         episodes = [run_episode(env, policy, seed=seed) for seed in seeds]
         env.close()
-        return {"duration": duration, **summarise_episodes(episodes, check.catch_time)}
+        return episodes
 
     def keep_if_best(self, record: dict, actor) -> None:
         """With ``eval.keep_best``, keep ``actor``'s weights if ``record`` is the best so far."""

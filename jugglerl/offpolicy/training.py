@@ -46,14 +46,14 @@ from jugglerl.offpolicy.env_stack import (
     state_size,
     state_transforms,
 )
-from jugglerl.offpolicy.evaluation import Evaluations, perturbed_conditions
+from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.stages import Stage, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
-from jugglerl.recording.blueprint import offpolicy_curves, training_blueprint
+from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
 
@@ -113,8 +113,7 @@ class OffPolicyTraining:
         """Train to the frame budget, evaluate in full, return the final metrics. On Ctrl-C the
         checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        curves = offpolicy_curves(perturbed_conditions(self.cfg))
-        logger.send_blueprint(training_blueprint(curves))
+        logger.send_blueprint(training_blueprint(self.evaluations.curves))
         collect = self.cfg.collector
         bar = tqdm(
             total=collect.total_frames, initial=self.frames, unit="frame", disable=not progress
