@@ -10,7 +10,7 @@ input ``state`` beside them:
 | --- | --- |
 | ``RenameTransform`` | copies ``observation`` to ``state``, the networks' input |
 | ``DoubleToFloat`` | ``state`` to float32 (MuJoCo states are float64; the networks are float32) |
-| ``ObservationParts`` | keeps the parts of it ``state.observe`` names (default all six) |
+| ``ObservationParts`` | keeps the parts ``state.observe`` names (absent for all six: the default) |
 | ``StepCounter`` | ``step_count``: per-episode step index (the slice sampler reads it) |
 | ``InitTracker`` | ``is_init``: marks first steps, which reset LSTM states and OU noise |
 | ``RewardSum`` | ``episode_reward``: the return of the running episode |
@@ -48,7 +48,12 @@ from torchrl.envs.libs.gym import default_info_dict_reader
 
 from jugglerl.offpolicy.actors import primer
 from jugglerl.offpolicy.ball_clock import BallClock, num_ball_clock_features
-from jugglerl.offpolicy.observation_parts import PART_SIZE, ObservationParts, observed_parts
+from jugglerl.offpolicy.observation_parts import (
+    OBSERVED,
+    PART_SIZE,
+    ObservationParts,
+    observed_parts,
+)
 from jugglerl.offpolicy.timestamp import TimestampFeatures, num_time_features
 from jugglerl_envs import ENV_ID
 
@@ -128,9 +133,12 @@ def state_transforms(
     transforms: list[Transform] = [
         RenameTransform(["observation"], ["state"], create_copy=True),
         DoubleToFloat(in_keys=["state"]),
-        ObservationParts(observed_parts(state_cfg)),
-        ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True),
     ]
+    parts = observed_parts(state_cfg)
+    if parts != tuple(OBSERVED):  # the whole observation in its order needs no cutting
+        transforms.append(ObservationParts(parts))
+    norm = ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True)
+    transforms.append(norm)
     harmonics = _harmonics(state_cfg)
     if state_cfg.timestamp:
         transforms.append(TimestampFeatures(duration, state_cfg.period, harmonics))
