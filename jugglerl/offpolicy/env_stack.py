@@ -49,8 +49,8 @@ from torchrl.envs.libs.gym import default_info_dict_reader
 from jugglerl.offpolicy.actors import primer
 from jugglerl.offpolicy.ball_clock import BallClock, num_ball_clock_features
 from jugglerl.offpolicy.observation_parts import (
-    OBSERVED,
     PART_SIZE,
+    WHOLE_OBSERVATION,
     ObservationParts,
     observed_parts,
 )
@@ -135,7 +135,7 @@ def state_transforms(
         DoubleToFloat(in_keys=["state"]),
     ]
     parts = observed_parts(state_cfg)
-    if parts != tuple(OBSERVED):  # the whole observation in its order needs no cutting
+    if parts != WHOLE_OBSERVATION:
         transforms.append(ObservationParts(parts))
     norm = ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True)
     transforms.append(norm)

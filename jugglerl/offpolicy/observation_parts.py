@@ -37,6 +37,8 @@ OBSERVED = {
     "cup": slice(12, 15),
     "cup_velocity": slice(15, 18),
 }
+#: The whole observation in its order: the default, and a selection that needs no cutting.
+WHOLE_OBSERVATION = tuple(OBSERVED)
 #: Every part there is, each of three values.
 PARTS = (*OBSERVED, "ball_from_cup")
 PART_SIZE = 3
@@ -46,7 +48,7 @@ def observed_parts(state_cfg) -> tuple[str, ...]:
     """``state.observe``, checked: every name a part, none twice, at least one; runs saved
     before the key existed saw the whole observation."""
     parts = state_cfg.get("observe")
-    parts = tuple(OBSERVED) if parts is None else tuple(parts)
+    parts = WHOLE_OBSERVATION if parts is None else tuple(parts)
     unknown = [part for part in parts if part not in PARTS]
     if not parts or unknown or len(set(parts)) != len(parts):
         raise ValueError(
