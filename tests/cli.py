@@ -45,6 +45,13 @@ def train_config(*overrides: str):
         return compose("train", overrides=list(overrides))
 
 
+def env_preset(name: str, **overrides):
+    """The env of preset ``configs/env/<name>.yaml`` with keyword ``overrides``."""
+    from jugglerl.config import make_juggle_env
+
+    return make_juggle_env(train_config(f"env={name}").env, **overrides)
+
+
 def run_train(*overrides: str, timeout: float = 300) -> subprocess.CompletedProcess:
     """``python scripts/train.py *overrides`` to completion."""
     return run_script("train.py", *overrides, timeout=timeout)

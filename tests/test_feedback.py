@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 import torch
 import yaml
-from cli import run_script, run_train, train_config
+from cli import env_preset, run_script, run_train, train_config
 
 from jugglerl.commands import CommandError
 from jugglerl.config import make_juggle_env
-from jugglerl.dps.spaces.feedback_gains import FeedbackGainSpace, FeedbackRollouts
+from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
+from jugglerl.dps.spaces.feedback_gains import FeedbackGainSpace
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy, load_command
 from jugglerl.policies.feedback import (
@@ -150,7 +151,8 @@ def test_rollouts_sum_the_throws_over_the_conditions():
     conditions = [{}, {"reset_noise": 0.02}]
     gains = FeedbackGains(0.58, 0.9, 0.3, 0.98, -0.02, 0.01)
     command = load_command("dps_best")
-    with FeedbackRollouts(env_cfg, conditions, workers=1) as rollouts:
+    build = lambda candidate, env: FeedbackPolicy(*candidate, env)  # noqa: E731
+    with ClosedLoopRollouts(env_cfg, conditions, 1, build) as rollouts:
         results = rollouts.evaluate([(command, gains), (command, OPEN_LOOP)], [3, 7])
     for i, (candidate, seed) in enumerate([(gains, 3), (OPEN_LOOP, 7)]):
         expected = 0
@@ -192,10 +194,10 @@ def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
 
 def test_every_shipped_policy_keeps_its_throws_honest():
     """The cup's throat never rises above 0.76 m, so a counted throw rose 0.24 m in free flight."""
-    from jugglerl.policies.files import shipped_names
+    from jugglerl.policies.files import read_policy_file, shipped_names
 
     for name in shipped_names():
-        env = JuggleEnv()
+        env = env_preset(read_policy_file(name)[0].get("env", "paper"))
         metrics = run_episode(env, load_policy(name, env), seed=0)
         assert metrics.max_cup_height <= 0.76 and metrics.throws >= 39, name
 

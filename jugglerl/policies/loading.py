@@ -12,6 +12,7 @@ from jugglerl.policies.actor_file import actor_policy_from_dict
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
 from jugglerl.policies.files import read_policy_file
+from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
 
 #: File names that mark a training checkpoint rather than a policy file.
 CHECKPOINT_SUFFIX = ".pt"
@@ -20,14 +21,15 @@ FILE_KINDS = {
     "command": lambda data, source, env: CommandPolicy(command_from_dict(data, source)),
     "feedback": feedback_policy_from_dict,
     "actor": lambda data, source, env: actor_policy_from_dict(data, source),
+    "throw_catch": throw_catch_policy_from_dict,
 }
 
 
 def load_policy(spec: str, env: gym.Env) -> Policy:
     """A policy for envs like ``env`` from a shipped name (``expert``, ``closed_loop``, ...), a
-    policy file (``kind: command``, the default, ``kind: feedback`` or ``kind: actor``) or a
-    training run (its directory or ``checkpoint.pt``: the actor it deploys, or the best policy
-    file of a search).
+    policy file (``kind: command``, the default, ``kind: feedback``, ``kind: throw_catch`` or
+    ``kind: actor``) or a training run (its directory or ``checkpoint.pt``: the actor it deploys,
+    or the best policy file of a search).
 
     Raises ``ValueError`` with a one-line reason when ``spec`` is unusable.
     """

@@ -3,9 +3,9 @@
 θ is ``FeedbackGains`` (bounded by ``algo.bounds``), searched from ``algo.start``; the command it
 locks to is fixed (``algo.command``). Every θ is rolled out closed loop in the Python env, once
 under each of ``algo.conditions`` (env overrides: nominal, kicks, start offsets), in
-``algo.workers`` processes (or as tasks of ``cluster=ray``); its return is its throws summed
-over the conditions, so the search prefers gains that juggle in all of them. The best θ is
-written as ``best_policy.yaml``.
+``algo.workers`` processes (or as tasks of ``cluster=ray``; ``ClosedLoopRollouts``); its return
+is its throws summed over the conditions, so the search prefers gains that juggle in all of
+them. The best θ is written as ``best_policy.yaml``.
 """
 
 from __future__ import annotations
@@ -14,15 +14,13 @@ from dataclasses import asdict
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 import torch
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
 from jugglerl.config import make_juggle_env
+from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
 from jugglerl.dps.distribution import SearchDistribution
-from jugglerl.dps.rollouts import RolloutResults
 from jugglerl.dps.spaces import SPACES
-from jugglerl.episode_pool import EpisodePool, EpisodeTask
 from jugglerl.policies.command import load_command
 from jugglerl.policies.feedback import (
     PARAM_NAMES,
@@ -37,51 +35,6 @@ BEST_POLICY = "best_policy.yaml"
 def gains_from_params(params: torch.Tensor) -> FeedbackGains:
     """θ (``PARAM_NAMES`` order) as ``FeedbackGains``."""
     return FeedbackGains(*(float(value) for value in params))
-
-
-class FeedbackRollouts:
-    """Rolls closed-loop candidates, ``(command, gains)`` pairs, out under each of ``conditions``.
-
-    ``evaluate(candidates, seeds)`` gives, per candidate, the throws summed over the conditions
-    and the earliest drop (NaN when none dropped); episode ``k`` of candidate ``i`` uses reset
-    seed ``seeds[i] + k``.
-    """
-
-    def __init__(
-        self,
-        env_cfg: DictConfig,
-        conditions: list[dict],
-        workers: int,
-        cluster: DictConfig | None = None,
-    ):
-        base = OmegaConf.to_container(env_cfg, resolve=True)
-        self.envs = [{**base, **condition} for condition in conditions]
-        self.templates = [make_juggle_env(OmegaConf.create(env)) for env in self.envs]
-        self._pool = EpisodePool(workers, cluster)
-
-    def evaluate(self, candidates: list[tuple], seeds: list[int]) -> RolloutResults:
-        tasks = [
-            EpisodeTask(env, FeedbackPolicy(command, gains, template), seed + k)
-            for (command, gains), seed in zip(candidates, seeds, strict=True)
-            for k, (env, template) in enumerate(zip(self.envs, self.templates, strict=True))
-        ]
-        episodes = self._pool.run(tasks)
-        throws = np.array([m.throws for m in episodes]).reshape(len(candidates), len(self.envs))
-        drops = np.array(
-            [np.nan if m.time_to_drop is None else m.time_to_drop for m in episodes]
-        ).reshape(throws.shape)
-        return RolloutResults(throws.sum(axis=1), np.fmin.reduce(drops, axis=1))
-
-    def close(self) -> None:
-        self._pool.close()
-        for env in self.templates:
-            env.close()
-
-    def __enter__(self) -> FeedbackRollouts:
-        return self
-
-    def __exit__(self, *exc_info) -> None:
-        self.close()
 
 
 class GainBox:
@@ -108,8 +61,10 @@ class GainBox:
 
 
 class ClosedLoopSpace:
-    """What the closed-loop spaces share: roll-outs under ``algo.conditions``, a decoded θ as a
-    ``(command, gains)`` pair, and the best one saved as a feedback policy file."""
+    """What the closed-loop spaces share: roll-outs under ``algo.conditions`` within
+    ``algo.limits`` (``jugglerl.dps.closed_loop_rollouts``), and, unless a subclass says
+    otherwise, a decoded θ as a ``(command, gains)`` pair whose best is saved as a feedback
+    policy file."""
 
     def __init__(self, cfg: DictConfig):
         self.cfg = cfg
@@ -117,19 +72,29 @@ class ClosedLoopSpace:
     def decode(self, params: torch.Tensor) -> tuple:
         raise NotImplementedError
 
+    def build(self, candidate, env: gym.Env) -> FeedbackPolicy:
+        """The policy of a decoded θ, for envs like ``env``."""
+        return FeedbackPolicy(*candidate, env)
+
     def search_env(self, reset_noise: float | None = None) -> gym.Env:
         return make_juggle_env(self.cfg.env, reset_noise=reset_noise)
 
-    def rollouts(self, reset_noise: float | None = None) -> FeedbackRollouts:
+    def rollouts(self, reset_noise: float | None = None) -> ClosedLoopRollouts:
         conditions = [dict(c) for c in self.cfg.algo.conditions]
         if reset_noise is not None:
             conditions = [{"reset_noise": reset_noise}]
-        return FeedbackRollouts(
-            self.cfg.env, conditions, self.cfg.algo.workers, self.cfg.get("cluster")
+        algo = self.cfg.algo
+        return ClosedLoopRollouts(
+            self.cfg.env,
+            conditions,
+            algo.workers,
+            self.build,
+            self.cfg.get("cluster"),
+            algo.get("limits"),
         )
 
-    def policy(self, params: torch.Tensor, env: gym.Env) -> FeedbackPolicy:
-        return FeedbackPolicy(*self.decode(params), env)
+    def policy(self, params: torch.Tensor, env: gym.Env):
+        return self.build(self.decode(params), env)
 
     def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
         save_feedback_policy(run_dir / BEST_POLICY, *self.decode(params), name)

@@ -1,0 +1,119 @@
+"""``throw_catch`` (``algo=throw_catch``): the throw and the catch of a ``ThrowCatchPolicy``.
+
+θ is the throw's knots, flattened (``[duration s, lift rad, elbow rad]`` each), followed by
+``catch_height`` (m), ``settle`` (s) and ``carry`` (s); the rest pose and the wrist lock are the
+start policy's (``algo.start``, a ``kind: throw_catch`` file), which must be the search env's
+home and wrist angles. Constraints (samples are clipped): ``algo.bounds`` for the durations and
+the three scalars, the servos' control ranges for the angles. Every θ is rolled out closed loop
+under each of ``algo.conditions``, and an episode outside ``algo.limits`` (the cup above
+0.76 m, a joint faster than the speed limit) scores nothing (``ClosedLoopRollouts``). The best
+θ is written as ``best_policy.yaml``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, replace
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import torch
+from omegaconf import DictConfig
+
+from jugglerl.dps.distribution import SearchDistribution
+from jugglerl.dps.spaces import SPACES
+from jugglerl.dps.spaces.feedback_gains import BEST_POLICY, ClosedLoopSpace
+from jugglerl.policies.files import read_policy_file
+from jugglerl.policies.throw_catch import (
+    ThrowCatch,
+    ThrowCatchPolicy,
+    save_throw_catch_policy,
+    throw_catch_from_dict,
+)
+
+#: The scalars after the knots, in θ order.
+SCALARS = ("catch_height", "settle", "carry")
+
+
+@SPACES.register("throw_catch")
+class ThrowCatchSpace(ClosedLoopSpace):
+    """θ = [knots, catch_height, settle, carry]; see the module docstring."""
+
+    def __init__(self, cfg: DictConfig):
+        super().__init__(cfg)
+        algo = cfg.algo
+        data, source = read_policy_file(algo.start)
+        if data.get("kind") != "throw_catch":
+            raise ValueError(f"algo.start={algo.start} is not a throw_catch policy file")
+        self.template = throw_catch_from_dict(data, source)
+        env = self.search_env()
+        try:  # refuses a search env that does not start where the policy throws from
+            ThrowCatchPolicy(self.template, env, str(data["name"]), data.get("env"))
+            low, high = env.unwrapped.model.actuator_ctrlrange[1:3].T.copy()  # lift, elbow
+        finally:
+            env.close()
+        self.knots = len(self.template.knots)
+        bounds = {key: algo.bounds[key] for key in ("duration", *SCALARS)}
+        knot_low = [bounds["duration"][0], low[0], low[1]]
+        knot_high = [bounds["duration"][1], high[0], high[1]]
+        self.low = torch.tensor(
+            knot_low * self.knots + [bounds[key][0] for key in SCALARS], dtype=torch.float64
+        )
+        self.high = torch.tensor(
+            knot_high * self.knots + [bounds[key][1] for key in SCALARS], dtype=torch.float64
+        )
+        if torch.any(self.low > self.high):
+            raise ValueError("algo.bounds: every [low, high] needs low <= high")
+        start = [v for knot in self.template.knots for v in knot]
+        start += [getattr(self.template, key) for key in SCALARS]
+        self.start = torch.tensor(start, dtype=torch.float64)
+        problems = self.violations(self.start)
+        if problems:
+            raise ValueError(f"algo.start={algo.start}: {'; '.join(problems)}")
+        std = algo.std
+        self.stds = torch.tensor(
+            [std.duration, std.lift, std.elbow] * self.knots + [std[key] for key in SCALARS],
+            dtype=torch.float64,
+        )
+
+    def _names(self) -> list[str]:
+        parts = ("duration", "lift", "elbow")
+        return [f"knot{i}.{part}" for i in range(self.knots) for part in parts] + list(SCALARS)
+
+    def project(self, params: torch.Tensor) -> torch.Tensor:
+        return torch.clamp(params, self.low, self.high)
+
+    def violations(self, params: torch.Tensor) -> list[str]:
+        return [
+            f"{name}={float(value):g} outside [{float(lo):g}, {float(hi):g}]"
+            for name, value, lo, hi in zip(self._names(), params, self.low, self.high, strict=True)
+            if not lo <= value <= hi
+        ]
+
+    def decode(self, params: torch.Tensor) -> ThrowCatch:
+        values = params.tolist()
+        split = 3 * self.knots
+        knots = tuple(tuple(values[i : i + 3]) for i in range(0, split, 3))
+        scalars = dict(zip(SCALARS, values[split:], strict=True))
+        return replace(self.template, knots=knots, **scalars)
+
+    def build(self, candidate: ThrowCatch, env: gym.Env) -> ThrowCatchPolicy:
+        return ThrowCatchPolicy(candidate, env)
+
+    def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
+        save_throw_catch_policy(run_dir / BEST_POLICY, self.decode(params), name)
+        return BEST_POLICY
+
+    def describe(self, params: torch.Tensor, name: str) -> dict:
+        best = asdict(self.decode(params))
+        return {"throw_catch": {key: np.asarray(value).tolist() for key, value in best.items()}}
+
+    def record(self, distribution: SearchDistribution) -> dict[str, float]:
+        """The means of the scalars and of the throw's total duration."""
+        mean = distribution.mean
+        durations = mean[: 3 * self.knots : 3]
+        scalars = zip(SCALARS, mean[3 * self.knots :], strict=True)
+        return {
+            "mean_throw_duration": float(durations.sum()),
+            **{f"mean_{key}": float(value) for key, value in scalars},
+        }

@@ -1,0 +1,218 @@
+"""A closed-loop juggler for fast flights: throw from rest, catch where the ball comes down, carry
+it back.
+
+Why: at real gravity (``env=earth``) with the UR5e's speed limit of π rad/s, no throw of the
+three actuated joints goes straight up high enough (the elbow alone flicks too slowly; shoulder
+and elbow together give the ball a sideways speed too), so the ball comes down some 0.4 m from
+where it left. A cyclic command cannot meet it there by timing alone; this policy does not cycle
+but reacts to the ball, in four modes:
+
+- **settle**: hold the pose until the ball has rested in the cup for ``settle`` seconds (within
+  ``REST_RADIUS`` of the cone's axis, ``REST_HEIGHT`` of its throat, moving with the cup slower
+  than ``REST_SPEED``, so a sloshing ball does not start a throw). At the ``rest`` pose, with
+  every joint within ``POSE_TOLERANCE`` of it, throw; elsewhere (the env's home, at the start),
+  carry the ball to ``rest`` first;
+- **throw**: step the lift and elbow setpoints through ``knots`` (each ``[duration s, lift rad,
+  elbow rad]`` held for its duration; the env's rate limit, if any, turns the jumps into ramps).
+  If the ball has not left after the knots and ``THROW_TIMEOUT``, carry back;
+- **catch**: once the ball is ``CLEAR_HEIGHT`` above the throat and the cup has stopped rising
+  (switching earlier lets the follow-through lift the cup higher), predict where the ball's
+  ballistic flight crosses ``catch_height`` (the env's gravity) and put the cup's throat there
+  by inverse kinematics (``jugglerl.policies.cup_ik``: pan, lift and elbow; the wrist stays
+  locked), re-predicted every step;
+- **carry**: once the ball has rested ``CAUGHT_REST`` seconds in the cup, move the setpoints to
+  ``rest`` along a smoothstep over ``carry`` seconds, then settle.
+
+A throw is repeatable because it starts from a settled ball; a catch forgives because the cup
+goes where the ball is. The throw's knots assume the wrist lock they were made with, so the
+env's ``wrist_angles`` must be the policy's (a one-line error otherwise). A policy file is YAML
+of ``kind: throw_catch`` with the ``ThrowCatch`` fields and, optionally, ``env``: the env preset
+it was made for (``configs/env/``), which that error names. Shipped: ``earth_juggler``
+(``env: earth``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+from jugglerl.commands import CommandError
+from jugglerl.policies.cup_ik import CupIK
+from jugglerl.policies.files import write_policy_file
+from jugglerl_envs.actions import ctrl_to_action
+
+KIND = "throw_catch"
+#: m: a ball centred within this of the cone's axis ...
+REST_RADIUS = 0.02
+#: m: ... and at most this far above the throat rests in the cup (it sits ≈ 0.04 m above it).
+REST_HEIGHT = 0.06
+#: m/s: ... and moves with the cup slower than this (1 mm of tracking noise gives ≈ 0.1 m/s).
+REST_SPEED = 0.25
+#: rad: a throw starts only once every actuated joint is this close to its rest angle.
+POSE_TOLERANCE = 0.1
+#: m above the throat at which a rising ball has left the cup.
+CLEAR_HEIGHT = 0.12
+#: m: the ball's centre above the throat when caught (what the landing prediction aims at).
+SEAT_HEIGHT = 0.04
+#: s a caught ball rests in the cup before it is carried back.
+CAUGHT_REST = 0.1
+#: s after the last knot ends that a ball still in the cup counts as a failed throw.
+THROW_TIMEOUT = 0.5
+
+
+@dataclass(frozen=True)
+class ThrowCatch:
+    """The parameters of a ``ThrowCatchPolicy``. Angles in radians, times in seconds, heights in
+    metres."""
+
+    rest: tuple[float, float, float]  # pan, lift, elbow: where the ball settles before a throw
+    wrist_angles: tuple[float, float, float]  # the env's wrist lock the throw was made for
+    knots: tuple[tuple[float, float, float], ...]  # the throw: [duration, lift, elbow] each
+    catch_height: float  # the throat's height at the catch
+    settle: float  # rest of the ball in the cup before each throw
+    carry: float  # duration of the move from the catch back to rest
+
+    def __post_init__(self):
+        for name in ("rest", "wrist_angles"):
+            value = getattr(self, name)
+            if len(value) != 3 or not np.isfinite(value).all():
+                raise CommandError(f"{name} must be 3 finite angles (rad)")
+        knots = np.asarray(self.knots, dtype=float)
+        if knots.ndim != 2 or knots.shape[1] != 3 or not np.isfinite(knots).all():
+            raise CommandError("knots must be a non-empty list of [duration, lift, elbow]")
+        if (knots[:, 0] <= 0).any():
+            raise CommandError("every knot's duration must be > 0 s")
+        for name in ("catch_height", "settle", "carry"):
+            if not math.isfinite(getattr(self, name)) or getattr(self, name) <= 0:
+                raise CommandError(f"{name} must be a positive number")
+
+
+FIELD_NAMES = tuple(f.name for f in fields(ThrowCatch))
+
+
+class ThrowCatchPolicy:
+    """Plays ``params`` (see the module docstring) in envs like ``env``, whose control period,
+    gravity, start pose and wrist lock it reads (it keeps no reference to the env)."""
+
+    def __init__(
+        self, params: ThrowCatch, env: gym.Env, name: str = KIND, preset: str | None = None
+    ):
+        unwrapped = env.unwrapped
+        if not np.allclose(params.wrist_angles, unwrapped.wrist_angles, atol=1e-6):
+            where = f"env={preset}" if preset else "the env it was made for"
+            raise CommandError(
+                f"policy {name} throws with wrist_angles={list(params.wrist_angles)} but the env"
+                f" locks them at {np.round(unwrapped.wrist_angles, 6).tolist()}: run it in {where}"
+            )
+        self.params = params
+        self._dt = unwrapped.dt
+        self._gravity = -unwrapped.gravity
+        self._rest = np.asarray(params.rest, dtype=float)
+        self._home = np.array(unwrapped.home, dtype=float)
+        self._knots = np.asarray(params.knots, dtype=float)
+        self._knot_ends = np.cumsum(self._knots[:, 0])
+        self._ik = CupIK(params.wrist_angles)
+        self.reset()
+
+    def reset(self) -> None:
+        self.mode = "settle"
+        self._clock = 0.0  # s in the current mode
+        self._rested = 0.0  # s the ball has rested in the cup without a break
+        self._target = self._home.copy()  # setpoints (pan, lift, elbow), rad
+        self._carry_from = self._home.copy()
+
+    def act(self, observation: np.ndarray, time: float) -> np.ndarray:
+        ball, ball_velocity = observation[6:9], observation[9:12]
+        cup, cup_velocity = observation[12:15], observation[15:18]
+        relative = ball - cup
+        resting = (
+            math.hypot(relative[0], relative[1]) < REST_RADIUS
+            and 0.0 < relative[2] < REST_HEIGHT
+            and np.linalg.norm(ball_velocity - cup_velocity) < REST_SPEED
+        )
+        self._rested = self._rested + self._dt if resting else 0.0
+        self._clock += self._dt
+        if self.mode == "settle" and self._rested >= self.params.settle:
+            if not np.array_equal(self._target, self._rest):
+                self._switch("carry")
+            elif np.abs(observation[:3] - self._rest).max() < POSE_TOLERANCE:
+                self._switch("throw")
+        if self.mode == "throw":
+            knot = np.searchsorted(self._knot_ends, self._clock, side="right")
+            lift, elbow = self._knots[min(knot, len(self._knots) - 1), 1:]
+            self._target = np.array([self._rest[0], lift, elbow])
+            if relative[2] > CLEAR_HEIGHT and cup_velocity[2] <= 0.0:
+                self._switch("catch")
+                self._target = self._rest.copy()  # the IK's first guess: the throw ends far off
+            elif self._clock > self._knot_ends[-1] + THROW_TIMEOUT:
+                self._switch("carry")
+        if self.mode == "catch":
+            landing = self._landing(ball, ball_velocity)
+            self._target = self._ik.solve(landing, self._target)
+            if self._rested >= CAUGHT_REST:
+                self._switch("carry")
+        if self.mode == "carry":
+            s = min(self._clock / self.params.carry, 1.0)
+            s = s * s * (3.0 - 2.0 * s)
+            self._target = self._carry_from + s * (self._rest - self._carry_from)
+            if s >= 1.0:
+                self._target = self._rest.copy()
+                self._switch("settle")
+        return ctrl_to_action(self._target)
+
+    def _switch(self, mode: str) -> None:
+        if mode == "carry":
+            self._carry_from = self._target.copy()
+        self.mode = mode
+        self._clock = 0.0
+
+    def _landing(self, ball: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+        """Where the throat must be for the ball, in ballistic flight, to come down into it at
+        ``catch_height`` (m, world frame)."""
+        drop = max(ball[2] - self.params.catch_height - SEAT_HEIGHT, 0.0)
+        rise = velocity[2]
+        flight = (rise + math.sqrt(rise * rise + 2.0 * self._gravity * drop)) / self._gravity
+        x, y = ball[:2] + velocity[:2] * flight
+        return np.array([x, y, self.params.catch_height])
+
+
+# --- files ----------------------------------------------------------------------------------
+def throw_catch_from_dict(data: dict, source: str) -> ThrowCatch:
+    """The ``ThrowCatch`` of a policy file's mapping; ``CommandError`` names a malformed one."""
+    expected = {"kind", "name", *FIELD_NAMES}
+    if not expected <= set(data) <= expected | {"env"}:
+        raise CommandError(
+            f"{source}: expected the keys {', '.join(sorted(expected))} (and optionally env)"
+        )
+    values = {}
+    for key in FIELD_NAMES:
+        try:
+            values[key] = np.asarray(data[key], dtype=float)
+        except (TypeError, ValueError):
+            raise CommandError(f"{source}: {key} must be numbers, not {data[key]!r}") from None
+    try:
+        return ThrowCatch(
+            rest=tuple(values["rest"].ravel().tolist()),
+            wrist_angles=tuple(values["wrist_angles"].ravel().tolist()),
+            knots=tuple(map(tuple, np.atleast_2d(values["knots"]).tolist())),
+            **{key: float(values[key]) for key in ("catch_height", "settle", "carry")},
+        )
+    except (TypeError, ValueError) as error:
+        raise CommandError(f"{source}: {error}") from None
+
+
+def throw_catch_policy_from_dict(data: dict, source: str, env: gym.Env) -> ThrowCatchPolicy:
+    params = throw_catch_from_dict(data, source)
+    return ThrowCatchPolicy(params, env, str(data["name"]), data.get("env"))
+
+
+def save_throw_catch_policy(path: str | Path, params: ThrowCatch, name: str) -> Path:
+    data = {"kind": KIND, "name": name, **asdict(params)}
+    data["knots"] = [list(knot) for knot in params.knots]
+    for key in ("rest", "wrist_angles"):
+        data[key] = list(data[key])
+    return write_policy_file(data, path)
