@@ -9,17 +9,25 @@ Its defaults are the paper preset (gravity -2 m/s², the authors' code); see ``c
 (radians): pan [-π/2, π/2], lift [-π, 0], elbow [0, π]. Action 0 puts the upper arm vertical and
 the forearm level. The wrist joints are held at ``wrist_angles`` by their own servos.
 
+With ``wrist_1_actuated=True`` (off by default: the paper's three actuators) ``wrist_1_joint`` is
+a fourth: ``Box(-1, 1, (4,))``, its setpoint over [-2π, 2π], starting at ``wrist_angles[0]``;
+it turns the cup in the arm's plane, so the cup's tilt no longer follows the lift and elbow.
+The speed limit and servo gain apply to it too. An action of the wrong length is refused.
+
 ## Observation
 ``Box(-inf, inf, (18,), float64)``:
 
 | index | what | unit |
 | --- | --- | --- |
-| 0-2 | angles of the 3 actuated joints | rad |
+| 0-2 | angles of pan, lift and elbow | rad |
 | 3-5 | their velocities | rad/s |
 | 6-8 | ball position | m |
 | 9-11 | ball velocity | m/s |
 | 12-14 | cup position (site ``cup``, the cone's throat) | m |
 | 15-17 | cup velocity | m/s |
+| 18-19 | ``wrist_1_actuated`` only: its angle (rad) and velocity (rad/s) | |
+
+The fourth joint's values come last, so every index above means the same in both envs.
 
 Cup position and velocity come from the kinematics of the last physics step (MuJoCo computes them
 before integrating), 2 ms older than the joint and ball states at the default timestep.
@@ -42,7 +50,8 @@ warning: ``info["physics_error"]`` says which; the env never raises). Truncated 
 ``throws``, ``catches``, ``max_consecutive_catches`` (episode totals), ``ball_height`` (m),
 ``in_cup`` (bool), episode maxima sampled every env step: ``max_cup_height`` (the cup's throat, m;
 a counted throw rose at least ``threshold`` minus this above the cup) and ``peak_joint_speed``
-(each actuated joint, rad/s); ``time`` (s), ``kicks`` (so far), ``physics_error`` ("" if fine).
+(each actuated joint, rad/s; 3 or 4 values); ``time`` (s), ``kicks`` (so far), ``physics_error``
+("" if fine).
 
 ## Perturbations (for robustness tests; off by default, see ``jugglerl_envs.perturbations``)
 ``reset_noise`` (ball start offset), ``ball_mass``, ``ball_radius``, ``servo_gain`` (scales the
@@ -74,6 +83,8 @@ DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
 MAX_RESET_NOISE = 0.05  # m: largest start offset of the ball (it must start above the cup)
 PAPER_HOME = (0.0, -1.5708, 2.15)  # rad: the paper preset (configs/env/paper.yaml)
 PAPER_WRIST = (-2.0, 1.5708, 0.0)
+#: Observation length with the paper's three actuators (two more with ``wrist_1_actuated``).
+OBSERVATION_SIZE = 18
 
 
 class JuggleEnv(SceneMeasurements, MujocoEnv):
@@ -103,6 +114,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         drop_height: float = 0.5,
         home: tuple[float, float, float] = PAPER_HOME,
         wrist_angles: tuple[float, float, float] = PAPER_WRIST,
+        wrist_1_actuated: bool = False,
         render_mode: str | None = None,
         width: int = 640,
         height: int = 480,
@@ -138,11 +150,18 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self.wrist_angles = np.array(
             check_vector("wrist_angles", wrist_angles, 3, -2 * math.pi, 2 * math.pi)
         )
+        if not isinstance(wrist_1_actuated, bool):
+            raise ValueError(f"wrist_1_actuated={wrist_1_actuated!r} is not valid: expected a bool")
+        self.wrist_1_actuated = wrist_1_actuated
+        self.actuated_joints = (
+            scene.ACTUATED_JOINTS_WITH_WRIST_1 if wrist_1_actuated else scene.ACTUATED_JOINTS
+        )
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
 
         self.metadata = {**self.metadata, "render_fps": round(1.0 / (timestep * frame_skip))}
-        observation_space = spaces.Box(-np.inf, np.inf, shape=(18,), dtype=np.float64)
+        size = OBSERVATION_SIZE + 2 * wrist_1_actuated
+        observation_space = spaces.Box(-np.inf, np.inf, shape=(size,), dtype=np.float64)
         super().__init__(
             scene.scene_path(),
             frame_skip,
@@ -153,7 +172,10 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             camera_name=camera_name,
         )
         self._cache_ids()
-        self._action_noise = ActionNoise(self.action_noise, self.action_noise_correlation, self.dt)
+        self._servos = len(self.actuated_joints)
+        self._action_noise = ActionNoise(
+            self.action_noise, self.action_noise_correlation, self.dt, self._servos
+        )
         self._tracker = BallTracker(self.ball_noise, self.ball_latency, self.dt)
         self._events = JuggleEvents(self.threshold)
         self._steps = 0
@@ -162,13 +184,14 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
     # --- set-up -----------------------------------------------------------------------------
     def _initialize_simulation(self):
         model = scene.load_model(self.gravity, self.timestep, self.ball_radius, self.ball_mass)
-        scale_servo_gains(model, slice(0, len(scene.ACTUATED_JOINTS)), self.servo_gain)
+        scale_servo_gains(model, slice(0, len(self.actuated_joints)), self.servo_gain)
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
         return model, mujoco.MjData(model)
 
     def _set_action_space(self):
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
+        shape = (len(self.actuated_joints),)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=shape, dtype=np.float32)
         return self.action_space
 
     # --- action mapping ---------------------------------------------------------------------
@@ -198,8 +221,8 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
 
         self._steps = 0
         self._kick_count = 0
-        self._setpoint = self.data.ctrl[:3].copy()
-        self._peak_joint_speed = np.zeros(3)
+        self._setpoint = self.data.ctrl[: self._servos].copy()
+        self._peak_joint_speed = np.zeros(self._servos)
         self._max_cup_height = float(self.cup_position()[2])
         self._measure_ball_in_cup()
         self._events.reset(self._ball_height(), self._clear_of_cup)
@@ -212,6 +235,11 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
 
     def step(self, action):
         action = np.asarray(action, dtype=np.float64)
+        if action.shape != (self._servos,):
+            raise ValueError(
+                f"an action of shape {action.shape}: this env drives {self._servos} servos"
+                f" (wrist_1_actuated={self.wrist_1_actuated})"
+            )
         if self._action_noise.active:
             action = action + self._action_noise.draw(self.np_random)
         target = self.action_to_ctrl(action)
@@ -240,14 +268,15 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
 
     def _simulate(self, target: np.ndarray) -> None:
         """Advance ``frame_skip`` physics steps towards the servo ``target`` (rad)."""
+        servos = self._servos
         if self.joint_speed_limit is None:
-            self.data.ctrl[:3] = target
+            self.data.ctrl[:servos] = target
             mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
             return
         max_change = self.joint_speed_limit * self.model.opt.timestep
         for _ in range(self.frame_skip):
             self._setpoint += np.clip(target - self._setpoint, -max_change, max_change)
-            self.data.ctrl[:3] = self._setpoint
+            self.data.ctrl[:servos] = self._setpoint
             mujoco.mj_step(self.model, self.data)
 
     @property
@@ -274,16 +303,17 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
 
     def _true_obs(self) -> np.ndarray:
         d = self.data
-        return np.concatenate(
-            [
-                d.qpos[self._arm_qpos[:3]],
-                d.qvel[self._arm_qvel],
-                d.qpos[self._ball_qpos : self._ball_qpos + 3],
-                d.qvel[self._ball_qvel : self._ball_qvel + 3],
-                d.site_xpos[self._cup_site],
-                self._cup_velocity(),
-            ]
-        )
+        parts = [
+            d.qpos[self._arm_qpos[:3]],
+            d.qvel[self._arm_qvel[:3]],
+            d.qpos[self._ball_qpos : self._ball_qpos + 3],
+            d.qvel[self._ball_qvel : self._ball_qvel + 3],
+            d.site_xpos[self._cup_site],
+            self._cup_velocity(),
+        ]
+        if self.wrist_1_actuated:  # appended, so the indices above keep their meaning
+            parts += [d.qpos[self._arm_qpos[3:4]], d.qvel[self._arm_qvel[3:4]]]
+        return np.concatenate(parts)
 
     def _info(self) -> dict:
         return {

@@ -1,8 +1,8 @@
 """``SceneMeasurements``: what the juggling env reads off its MuJoCo state after a step.
 
 The ball's height, position and contacts, the cup's position and velocity, whether the ball is in
-the cup, and whether the physics went bad. A mixin of ``JuggleEnv`` (it reads ``self.model`` and
-``self.data``); ``_cache_ids`` looks the scene's ids up once.
+the cup, and whether the physics went bad. A mixin of ``JuggleEnv`` (it reads ``self.model``,
+``self.data`` and ``self.actuated_joints``); ``_cache_ids`` looks the scene's ids up once.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ class SceneMeasurements:
     def _cache_ids(self) -> None:
         m = self.model
         self._arm_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in scene.ARM_JOINTS])
-        self._arm_qvel = np.array([m.jnt_dofadr[m.joint(j).id] for j in scene.ACTUATED_JOINTS])
+        self._arm_qvel = np.array([m.jnt_dofadr[m.joint(j).id] for j in self.actuated_joints])
         ball_joint = m.body(scene.BALL_BODY).jntadr[0]
         self._ball_qpos = m.jnt_qposadr[ball_joint]
         self._ball_qvel = m.jnt_dofadr[ball_joint]

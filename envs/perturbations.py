@@ -65,23 +65,26 @@ class ActionNoise:
     drift of a real servo's setpoint.
     """
 
-    def __init__(self, sigma: float, correlation: float, dt: float):
+    def __init__(self, sigma: float, correlation: float, dt: float, size: int = 3):
         self.sigma = sigma
         self.decay = math.exp(-dt / correlation) if correlation > 0 else 0.0
-        self.value = np.zeros(3)
+        self.size = size  # the action's length
+        self.value = np.zeros(size)
 
     @property
     def active(self) -> bool:
         return self.sigma > 0
 
     def reset(self, rng: np.random.Generator) -> None:
-        self.value = rng.normal(0.0, self.sigma, size=3) if self.active else np.zeros(3)
+        self.value = (
+            rng.normal(0.0, self.sigma, size=self.size) if self.active else np.zeros(self.size)
+        )
 
     def draw(self, rng: np.random.Generator) -> np.ndarray:
         """The noise of the next step (call once per step, after ``reset``)."""
         if not self.active:
             return self.value
-        innovation = rng.normal(0.0, self.sigma * math.sqrt(1 - self.decay**2), size=3)
+        innovation = rng.normal(0.0, self.sigma * math.sqrt(1 - self.decay**2), size=self.size)
         self.value = self.decay * self.value + innovation
         return self.value
 

@@ -18,8 +18,10 @@ ARM_JOINTS = (
     "wrist_2_joint",
     "wrist_3_joint",
 )
-#: The learnable actuators (position servos), in action order.
+#: The learnable actuators (position servos), in action order: the paper's three.
 ACTUATED_JOINTS = ARM_JOINTS[:3]
+#: With ``JuggleEnv(wrist_1_actuated=True)``, ``wrist_1_joint`` is a fourth, after them.
+ACTUATED_JOINTS_WITH_WRIST_1 = ARM_JOINTS[:4]
 WRIST_JOINTS = ARM_JOINTS[3:]
 
 BALL_BODY = "ball"

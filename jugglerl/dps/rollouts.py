@@ -60,6 +60,11 @@ class CommandRollouts:
 
     def __init__(self, env: JuggleEnv, nthread: int | None = None):
         self.env = env.unwrapped
+        if self.env.wrist_1_actuated:
+            raise ValueError(
+                "env.wrist_1_actuated: open-loop commands drive the three paper actuators; set"
+                " it to false for DPS"
+            )
         if self.env.kicks_ball:
             raise ValueError(
                 "env.kick_rate/kick_speed: DPS roll-outs run open loop in C and cannot kick the"

@@ -17,9 +17,11 @@ but reacts to the ball, in four modes:
   If the ball has not left after the knots and ``THROW_TIMEOUT``, carry back;
 - **catch**: once the ball is ``CLEAR_HEIGHT`` above the throat and the cup has stopped rising
   (switching earlier lets the follow-through lift the cup higher), predict where the ball's
-  ballistic flight crosses ``catch_height`` (the env's gravity) and put the cup's throat there
-  by inverse kinematics (``jugglerl.policies.cup_ik``: pan, lift and elbow; the wrist stays
-  locked), re-predicted every step;
+  ballistic flight crosses ``catch_height`` (the env's gravity; while the ball is clear of the
+  cup, its horizontal course is a line fitted to the positions seen, ``jugglerl.policies.
+  flight_fit``, which averages a tracker's noise away) and put the cup's throat there by inverse
+  kinematics (``jugglerl.policies.cup_ik``: pan, lift and elbow; the wrist stays locked),
+  re-predicted every step;
 - **carry**: once the ball has rested ``CAUGHT_REST`` seconds in the cup, move the setpoints to
   ``rest`` along a smoothstep over ``carry`` seconds, then settle.
 
@@ -43,6 +45,7 @@ import numpy as np
 from jugglerl.commands import CommandError
 from jugglerl.policies.cup_ik import CupIK
 from jugglerl.policies.files import write_policy_file
+from jugglerl.policies.flight_fit import FlightFit
 from jugglerl_envs.actions import ctrl_to_action
 
 KIND = "throw_catch"
@@ -58,6 +61,9 @@ POSE_TOLERANCE = 0.1
 CLEAR_HEIGHT = 0.12
 #: m: the ball's centre above the throat when caught (what the landing prediction aims at).
 SEAT_HEIGHT = 0.04
+#: per sample, the weight old flight samples keep in the fit (50 Hz: a memory of ≈ 0.4 s), so a
+#: kicked ball's new course takes over.
+FLIGHT_FORGET = 0.95
 #: s a caught ball rests in the cup before it is carried back.
 CAUGHT_REST = 0.1
 #: s after the last knot ends that a ball still in the cup counts as a failed throw.
@@ -116,6 +122,7 @@ class ThrowCatchPolicy:
         self._knots = np.asarray(params.knots, dtype=float)
         self._knot_ends = np.cumsum(self._knots[:, 0])
         self._ik = CupIK(params.wrist_angles)
+        self._flight = FlightFit(FLIGHT_FORGET)
         self.reset()
 
     def reset(self) -> None:
@@ -148,10 +155,14 @@ class ThrowCatchPolicy:
             if relative[2] > CLEAR_HEIGHT and cup_velocity[2] <= 0.0:
                 self._switch("catch")
                 self._target = self._rest.copy()  # the IK's first guess: the throw ends far off
+                self._flight.reset()
             elif self._clock > self._knot_ends[-1] + THROW_TIMEOUT:
                 self._switch("carry")
         if self.mode == "catch":
-            landing = self._landing(ball, ball_velocity)
+            flying = relative[2] > CLEAR_HEIGHT
+            if flying:
+                self._flight.add(self._clock, ball[:2])
+            landing = self._landing(ball, ball_velocity, fitted=flying)
             self._target = self._ik.solve(landing, self._target)
             if self._rested >= CAUGHT_REST:
                 self._switch("carry")
@@ -170,13 +181,17 @@ class ThrowCatchPolicy:
         self.mode = mode
         self._clock = 0.0
 
-    def _landing(self, ball: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+    def _landing(self, ball: np.ndarray, velocity: np.ndarray, fitted: bool) -> np.ndarray:
         """Where the throat must be for the ball, in ballistic flight, to come down into it at
-        ``catch_height`` (m, world frame)."""
+        ``catch_height`` (m, world frame); its horizontal course from the fitted line while it
+        flies, from the latest sample as it lands (the cup then follows the ball in)."""
         drop = max(ball[2] - self.params.catch_height - SEAT_HEIGHT, 0.0)
         rise = velocity[2]
         flight = (rise + math.sqrt(rise * rise + 2.0 * self._gravity * drop)) / self._gravity
-        x, y = ball[:2] + velocity[:2] * flight
+        position, course = ball[:2], velocity[:2]
+        if fitted:
+            position, course = self._flight.state(self._clock, position, course)
+        x, y = position + course * flight
         return np.array([x, y, self.params.catch_height])
 
 

@@ -1,10 +1,12 @@
-"""``throw_catch`` (``algo=throw_catch``): the throw and the catch of a ``ThrowCatchPolicy``.
+"""``throw_catch`` (``algo=throw_catch``): the rest pose, throw and catch of a
+``ThrowCatchPolicy``.
 
-θ is the throw's knots, flattened (``[duration s, lift rad, elbow rad]`` each), followed by
-``catch_height`` (m), ``settle`` (s) and ``carry`` (s); the rest pose and the wrist lock are the
-start policy's (``algo.start``, a ``kind: throw_catch`` file), which must be the search env's
-home and wrist angles. Constraints (samples are clipped): ``algo.bounds`` for the durations and
-the three scalars, the servos' control ranges for the angles. Every θ is rolled out closed loop
+θ is the rest pose's lift and elbow (rad), the throw's knots, flattened (``[duration s, lift
+rad, elbow rad]`` each), then ``catch_height`` (m), ``settle`` (s) and ``carry`` (s), searched
+from the start policy ``algo.start`` (a ``kind: throw_catch`` file), whose pan and wrist lock
+stay (the search env must lock the wrist as it does). Constraints (samples are clipped):
+``algo.bounds`` for the durations and the three scalars, the servos' control ranges for the
+angles. Every θ is rolled out closed loop
 under each of ``algo.conditions``, and an episode outside ``algo.limits`` (the cup above
 0.76 m, a joint faster than the speed limit) scores nothing (``ClosedLoopRollouts``). The best
 θ is written as ``best_policy.yaml``.
@@ -37,7 +39,8 @@ SCALARS = ("catch_height", "settle", "carry")
 
 @SPACES.register("throw_catch")
 class ThrowCatchSpace(ClosedLoopSpace):
-    """θ = [knots, catch_height, settle, carry]; see the module docstring."""
+    """θ = [rest lift, rest elbow, knots, catch_height, settle, carry]; see the module
+    docstring."""
 
     def __init__(self, cfg: DictConfig):
         super().__init__(cfg)
@@ -54,17 +57,17 @@ class ThrowCatchSpace(ClosedLoopSpace):
             env.close()
         self.knots = len(self.template.knots)
         bounds = {key: algo.bounds[key] for key in ("duration", *SCALARS)}
-        knot_low = [bounds["duration"][0], low[0], low[1]]
-        knot_high = [bounds["duration"][1], high[0], high[1]]
         self.low = torch.tensor(
-            knot_low * self.knots + [bounds[key][0] for key in SCALARS], dtype=torch.float64
+            [*low, *[bounds["duration"][0], *low] * self.knots, *(bounds[k][0] for k in SCALARS)],
+            dtype=torch.float64,
         )
         self.high = torch.tensor(
-            knot_high * self.knots + [bounds[key][1] for key in SCALARS], dtype=torch.float64
+            [*high, *[bounds["duration"][1], *high] * self.knots, *(bounds[k][1] for k in SCALARS)],
+            dtype=torch.float64,
         )
         if torch.any(self.low > self.high):
             raise ValueError("algo.bounds: every [low, high] needs low <= high")
-        start = [v for knot in self.template.knots for v in knot]
+        start = [*self.template.rest[1:], *(v for knot in self.template.knots for v in knot)]
         start += [getattr(self.template, key) for key in SCALARS]
         self.start = torch.tensor(start, dtype=torch.float64)
         problems = self.violations(self.start)
@@ -72,13 +75,15 @@ class ThrowCatchSpace(ClosedLoopSpace):
             raise ValueError(f"algo.start={algo.start}: {'; '.join(problems)}")
         std = algo.std
         self.stds = torch.tensor(
-            [std.duration, std.lift, std.elbow] * self.knots + [std[key] for key in SCALARS],
+            [std.lift, std.elbow, *[std.duration, std.lift, std.elbow] * self.knots]
+            + [std[key] for key in SCALARS],
             dtype=torch.float64,
         )
 
     def _names(self) -> list[str]:
         parts = ("duration", "lift", "elbow")
-        return [f"knot{i}.{part}" for i in range(self.knots) for part in parts] + list(SCALARS)
+        knots = [f"knot{i}.{part}" for i in range(self.knots) for part in parts]
+        return ["rest.lift", "rest.elbow", *knots, *SCALARS]
 
     def project(self, params: torch.Tensor) -> torch.Tensor:
         return torch.clamp(params, self.low, self.high)
@@ -92,10 +97,11 @@ class ThrowCatchSpace(ClosedLoopSpace):
 
     def decode(self, params: torch.Tensor) -> ThrowCatch:
         values = params.tolist()
-        split = 3 * self.knots
-        knots = tuple(tuple(values[i : i + 3]) for i in range(0, split, 3))
+        split = 2 + 3 * self.knots
+        rest = (self.template.rest[0], *values[:2])
+        knots = tuple(tuple(values[i : i + 3]) for i in range(2, split, 3))
         scalars = dict(zip(SCALARS, values[split:], strict=True))
-        return replace(self.template, knots=knots, **scalars)
+        return replace(self.template, rest=rest, knots=knots, **scalars)
 
     def build(self, candidate: ThrowCatch, env: gym.Env) -> ThrowCatchPolicy:
         return ThrowCatchPolicy(candidate, env)
@@ -111,8 +117,8 @@ class ThrowCatchSpace(ClosedLoopSpace):
     def record(self, distribution: SearchDistribution) -> dict[str, float]:
         """The means of the scalars and of the throw's total duration."""
         mean = distribution.mean
-        durations = mean[: 3 * self.knots : 3]
-        scalars = zip(SCALARS, mean[3 * self.knots :], strict=True)
+        durations = mean[2 : 2 + 3 * self.knots : 3]
+        scalars = zip(SCALARS, mean[2 + 3 * self.knots :], strict=True)
         return {
             "mean_throw_duration": float(durations.sum()),
             **{f"mean_{key}": float(value) for key, value in scalars},
