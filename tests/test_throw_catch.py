@@ -26,7 +26,7 @@ from jugglerl_envs import JuggleEnv
 
 
 def shipped() -> tuple:
-    data, source = read_policy_file("earth_juggler")
+    data, source = read_policy_file("earth_expert")
     return throw_catch_from_dict(data, source), data
 
 
@@ -59,7 +59,7 @@ def test_earth_juggler_by_name_juggles_at_real_gravity_within_the_speed_limit(mo
 
 def test_its_cycle_runs_through_the_four_modes_in_order():
     env = env_preset("earth", duration=6.0)
-    policy = load_policy("earth_juggler", env)
+    policy = load_policy("earth_expert", env)  # its rest pose is the earth preset's home
     observation, info = env.reset(seed=0)
     policy.reset()
     modes = [policy.mode]

@@ -16,9 +16,9 @@ from jugglerl.policies.loading import load_policy
 from jugglerl.policies.throw_catch import ThrowCatchPolicy
 
 
-def test_it_starts_at_earth_juggler_and_decodes_back_to_it():
+def test_it_starts_at_earth_expert_and_decodes_back_to_it():
     space = ThrowCatchSpace(train_config("algo=throw_catch", "algo.workers=1"))
-    shipped = load_policy("earth_juggler", env_preset("earth"))
+    shipped = load_policy("earth_expert", env_preset("earth"))
     assert space.decode(space.start) == shipped.params
     assert len(space.start) == len(space.stds) == 2 + 3 * 3 + 3
 
@@ -45,7 +45,7 @@ def test_a_start_made_for_another_wrist_lock_is_one_error_line(tmp_path):
     result = run_train("algo=throw_catch", "env=paper", f"hydra.run.dir={tmp_path}")
     assert result.returncode == 1
     last = result.stderr.strip().splitlines()[-1]
-    assert last.startswith("error: policy earth_juggler throws with wrist_angles")
+    assert last.startswith("error: policy earth_expert throws with wrist_angles")
 
 
 def test_train_throw_catch_writes_a_policy_that_evaluate_replays(tmp_path):
