@@ -8,7 +8,7 @@ python scripts/train.py algo=bc teacher.policy=closed_loop    # behaviour clonin
 python scripts/train.py algo.loss=td3 teacher.policy=closed_loop_tolerant  # TD3 in the RL stage
 python scripts/train.py algo=dps                              # eREPS from the expert, 500 roll-outs
 python scripts/train.py algo=feedback                         # closed loop: eREPS over its gains
-python scripts/train.py algo=throw_catch                      # real gravity: throw, catch, carry back
+python scripts/train.py algo=throw_catch                      # earth: throw, catch, carry back
 python scripts/train.py resume=outputs/train/<algo>/<run>     # continue from its checkpoint
 python scripts/train.py algo=dps cluster=ray cluster.address=HEAD:6379  # roll-outs on Ray
 python scripts/train.py -m seed=0,1,2 cluster=ray             # a sweep's jobs as Ray tasks

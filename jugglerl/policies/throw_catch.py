@@ -8,10 +8,10 @@ where it left. A cyclic command cannot meet it there by timing alone; this polic
 but reacts to the ball, in four modes:
 
 - **settle**: hold the pose until the ball has rested in the cup for ``settle`` seconds (within
-  ``REST_RADIUS`` of the cone's axis, ``REST_HEIGHT`` of its throat, moving with the cup slower
-  than ``REST_SPEED``, so a sloshing ball does not start a throw). At the ``rest`` pose, with
-  every joint within ``POSE_TOLERANCE`` of it, throw; elsewhere (the env's home, at the start),
-  carry the ball to ``rest`` first;
+  ``REST_RADIUS`` of the cone's axis, ``REST_HEIGHT`` of its throat, its velocity relative to the
+  cup, smoothed over a few steps by ``SLOSH_FILTER``, below ``REST_SPEED``), so a sloshing ball
+  does not start a throw. At the ``rest`` pose, with every joint within ``POSE_TOLERANCE`` of it,
+  throw; elsewhere (the env's home, at the start), carry the ball to ``rest`` first;
 - **throw**: step the lift and elbow setpoints through ``knots`` (each ``[duration s, lift rad,
   elbow rad]`` held for its duration; the env's rate limit, if any, turns the jumps into ramps).
   If the ball has not left after the knots and ``THROW_TIMEOUT``, carry back;
@@ -53,8 +53,12 @@ KIND = "throw_catch"
 REST_RADIUS = 0.02
 #: m: ... and at most this far above the throat rests in the cup (it sits ≈ 0.04 m above it).
 REST_HEIGHT = 0.06
-#: m/s: ... and moves with the cup slower than this (1 mm of tracking noise gives ≈ 0.1 m/s).
+#: m/s: ... and moves with the cup slower than this, smoothed (1 mm of tracking noise makes the
+#: ball's differenced velocity ≈ 0.07 m/s noisy per axis, half that once smoothed).
 REST_SPEED = 0.25
+#: per step, how far the filtered relative velocity moves towards the latest (a tracker's noise
+#: on it shrinks to a half: sloshing still shows, 2 mm of tracking noise no longer does).
+SLOSH_FILTER = 0.4
 #: rad: a throw starts only once every actuated joint is this close to its rest angle.
 POSE_TOLERANCE = 0.1
 #: m above the throat at which a rising ball has left the cup.
@@ -129,6 +133,7 @@ class ThrowCatchPolicy:
         self.mode = "settle"
         self._clock = 0.0  # s in the current mode
         self._rested = 0.0  # s the ball has rested in the cup without a break
+        self._slosh = np.zeros(3)  # m/s, the ball's velocity relative to the cup, filtered
         self._target = self._home.copy()  # setpoints (pan, lift, elbow), rad
         self._carry_from = self._home.copy()
 
@@ -136,10 +141,11 @@ class ThrowCatchPolicy:
         ball, ball_velocity = observation[6:9], observation[9:12]
         cup, cup_velocity = observation[12:15], observation[15:18]
         relative = ball - cup
+        self._slosh += SLOSH_FILTER * (ball_velocity - cup_velocity - self._slosh)
         resting = (
             math.hypot(relative[0], relative[1]) < REST_RADIUS
             and 0.0 < relative[2] < REST_HEIGHT
-            and np.linalg.norm(ball_velocity - cup_velocity) < REST_SPEED
+            and np.linalg.norm(self._slosh) < REST_SPEED
         )
         self._rested = self._rested + self._dt if resting else 0.0
         self._clock += self._dt
