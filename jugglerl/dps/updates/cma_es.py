@@ -22,12 +22,11 @@ from jugglerl.dps.updates import UPDATES, UpdateRule
 
 @UPDATES.register("cmaes")
 class CMAES(UpdateRule):
-    def __init__(self, population: int, seed: int = 0, lr_adapt: bool = False):
+    def __init__(self, population: int, seed: int = 0):
         if population < 2:
             raise ValueError(f"algo.rollouts={population}: CMA-ES needs a population of >= 2")
         self.population = population
         self.seed = seed
-        self.lr_adapt = lr_adapt
         self.cma: CMA | None = None
 
     @classmethod
@@ -38,7 +37,7 @@ class CMAES(UpdateRule):
                 "algo.std: CMA-ES needs every std > 0; to hold a parameter fixed, give it equal"
                 " bounds (algo.bounds.NAME=[v,v]) and a small std"
             )
-        return cls(algo.rollouts, lr_adapt=bool(algo.get("cmaes_lr_adapt", False)))
+        return cls(algo.rollouts)
 
     def __call__(self, distribution, params, returns):
         if self.cma is None:
@@ -48,7 +47,6 @@ class CMAES(UpdateRule):
                 cov=distribution.cov.numpy().copy(),
                 population_size=self.population,
                 seed=self.seed,  # CMA's own sampler is never used: the collector samples
-                lr_adapt=self.lr_adapt,
             )
         if len(returns) != self.population:
             raise ValueError(
