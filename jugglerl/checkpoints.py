@@ -3,7 +3,9 @@
 A checkpoint is a dict saved with ``torch.save``. It always holds the run's resolved ``config``
 (``config["algo"]["trainer"]`` says which training loop resumes it) and ``deploys``, what the run
 deploys as a policy: ``"actor"`` (the network in the checkpoint, whatever loss trained it) or the
-name of a policy file in the run directory (a search's best command or feedback policy).
+name of a policy file in the run directory (a search's best command or feedback policy). It also
+holds ``config_unresolved``, the same config with its interpolations kept, which a resume starts
+from: an override of ``algo.loss`` then reaches the stage whose loss is ``${algo.loss}``.
 """
 
 from __future__ import annotations
@@ -12,8 +14,17 @@ import os
 from pathlib import Path
 
 import torch
+from omegaconf import DictConfig, OmegaConf
 
 CHECKPOINT = "checkpoint.pt"
+
+
+def config_entries(cfg: DictConfig) -> dict:
+    """A run's config as a checkpoint keeps it: resolved, and with its interpolations."""
+    return {
+        "config": OmegaConf.to_container(cfg, resolve=True),
+        "config_unresolved": OmegaConf.to_container(cfg, resolve=False),
+    }
 
 
 def save_checkpoint(state: dict, path: Path) -> None:

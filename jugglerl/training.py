@@ -36,13 +36,14 @@ def trainer_class(name: str):
 
 def resume_state(resume: str, cfg: DictConfig, overrides: list[str]) -> tuple:
     """(config, run directory, checkpoint) of ``resume=PATH``: the checkpoint's config with the
-    command line's ``overrides`` (other than ``resume`` and Hydra's own) applied on top."""
+    command line's ``overrides`` (other than ``resume`` and Hydra's own) applied on top, before
+    its interpolations are resolved (checkpoints older than ``config_unresolved``: after)."""
     try:
         state = load_checkpoint(resume)
     except ValueError as error:
         raise ValueError(f"resume: {error}") from None
     path = Path(resume)
-    saved = OmegaConf.create(state["config"])
+    saved = OmegaConf.create(state.get("config_unresolved", state["config"]))
     for override in overrides:
         key = override.split("=", 1)[0].lstrip("+~")
         if key != "resume" and not key.startswith("hydra"):

@@ -57,6 +57,23 @@ def run_train(*overrides: str, timeout: float = 300) -> subprocess.CompletedProc
     return run_script("train.py", *overrides, timeout=timeout)
 
 
+def run_short_search(algo: str, run_dir: Path, *overrides: str) -> subprocess.CompletedProcess:
+    """``train.py algo=ALGO`` cut to one episode of two closed-loop samples in one worker, under a
+    nominal and a noisy condition, with a one-seed noise check and no recording."""
+    return run_train(
+        f"algo={algo}",
+        "algo.episodes=1",
+        "algo.rollouts=2",
+        "algo.workers=1",
+        "algo.noise_check.seeds=1",
+        "algo.conditions=[{},{action_noise:0.003}]",
+        "progress=false",
+        "record_best=false",
+        f"hydra.run.dir={run_dir}",
+        *overrides,
+    )
+
+
 def run_script(
     name: str, *overrides: str, timeout: float = 300, env: dict[str, str] | None = None
 ) -> subprocess.CompletedProcess:

@@ -2,10 +2,9 @@
 
 import json
 
-import torch
-from cli import run_train, train_config
+from cli import run_short_search, run_train, train_config
+from search_spaces import assert_wide_samples_are_valid_policies
 
-from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces.closed_loop import CommandAndGainSpace
 from jugglerl.policies.feedback import FeedbackPolicy
 from jugglerl.policies.loading import load_policy
@@ -22,32 +21,12 @@ def test_it_starts_at_its_start_policy_and_decodes_back_to_it():
 
 def test_its_constraints_hold_over_many_wide_samples():
     space = CommandAndGainSpace(train_config("algo=closed_loop"))
-    wide = SearchDistribution.diagonal(space.start, space.stds * 30)
-    samples = wide.sample(2000, torch.Generator().manual_seed(0), space)
-    assert all(space.violations(theta) == [] for theta in samples)
-    assert samples.std(0).min() > 0  # every entry still varies
-    env = JuggleEnv(duration=2.0)
-    policy = space.policy(samples[0], env)
-    assert isinstance(policy, FeedbackPolicy)
-    observation, info = env.reset(seed=0)
-    policy.reset()
-    assert policy.act(observation, info["time"]).shape == (3,)
+    assert_wide_samples_are_valid_policies(space, JuggleEnv(duration=2.0), FeedbackPolicy)
 
 
 def test_train_closed_loop_writes_a_feedback_policy(tmp_path):
     run_dir = tmp_path / "run"
-    result = run_train(
-        "algo=closed_loop",
-        "env.duration=4",
-        "algo.episodes=1",
-        "algo.rollouts=2",
-        "algo.workers=1",
-        "algo.noise_check.seeds=1",
-        "algo.conditions=[{},{action_noise:0.003}]",
-        "progress=false",
-        "record_best=false",
-        f"hydra.run.dir={run_dir}",
-    )
+    result = run_short_search("closed_loop", run_dir, "env.duration=4")
     assert result.returncode == 0, result.stderr
     metrics = json.loads((run_dir / "metrics.json").read_text())
     assert metrics["rollouts"] == 2 and "via_points" in metrics["command"]

@@ -15,6 +15,7 @@ from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy.stages import stages_from_config
 from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl.offpolicy.training import OffPolicyTraining
+from jugglerl.training import resume_state
 
 #: Three stages of 128 frames each, the critic warming up over the RL stage's first batch.
 STAGED = [
@@ -107,6 +108,22 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
     assert "loss_critic" in metrics["history"][-1] and "loss_bc" in metrics["history"][-1]
     for key, value in again.actor.state_dict().items():  # the warm-up kept the actor still
         torch.testing.assert_close(value, actor[key])
+    again.close()
+
+
+def test_a_resume_with_algo_loss_td3_runs_td3_in_the_rl_stage(tmp_path):
+    """The RL stage's loss is ``${algo.loss}``: a resume's override reaches it (the checkpoint keeps
+    the config's interpolations; with only the resolved config it stayed DDPG)."""
+    cfg = train_config(*STAGED)
+    cfg.collector.total_frames = 256  # stop after the DAgger stage
+    train(cfg, tmp_path / "run")
+    overrides = ["collector.total_frames=384", "algo.loss=td3"]
+    resumed, run_dir, state = resume_state(
+        str(tmp_path / "run"), train_config(*STAGED, *overrides), overrides
+    )
+    assert resumed.algo.stages[2].loss == "td3" and resumed.collector.total_frames == 384
+    metrics, again = train(resumed, run_dir, state)
+    assert again.stage.name == "rl" and type(again.update).__name__ == "TD3"
     again.close()
 
 

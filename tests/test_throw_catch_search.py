@@ -4,11 +4,10 @@ import json
 
 import numpy as np
 import pytest
-import torch
-from cli import env_preset, run_script, run_train, train_config
+from cli import env_preset, run_script, run_short_search, run_train, train_config
+from search_spaces import assert_wide_samples_are_valid_policies
 
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts, within_limits
-from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces.throw_catch import ThrowCatchSpace
 from jugglerl.evaluation import EpisodeMetrics
 from jugglerl.policies.flight_fit import FlightFit
@@ -25,20 +24,12 @@ def test_it_starts_at_earth_expert_and_decodes_back_to_it():
 
 def test_its_constraints_hold_over_many_wide_samples():
     space = ThrowCatchSpace(train_config("algo=throw_catch", "algo.workers=1"))
-    wide = SearchDistribution.diagonal(space.start, space.stds * 30)
-    samples = wide.sample(2000, torch.Generator().manual_seed(0), space)
-    assert all(space.violations(theta) == [] for theta in samples)
-    assert samples.std(0).min() > 0  # every entry still varies
-    for theta in samples[:50]:  # every sample is a policy the env accepts
+    env = env_preset("earth", duration=1.0)
+    samples = assert_wide_samples_are_valid_policies(space, env, ThrowCatchPolicy)
+    for theta in samples[:50]:  # what the bounds promise
         params = space.decode(theta)
         assert min(knot[0] for knot in params.knots) >= 0.02 and params.settle >= 0.05
         assert 0.3 <= params.catch_height <= 0.76
-    env = env_preset("earth", duration=1.0)
-    policy = space.policy(samples[0], env)
-    assert isinstance(policy, ThrowCatchPolicy)
-    observation, info = env.reset(seed=0)
-    policy.reset()
-    assert policy.act(observation, info["time"]).shape == (3,)
 
 
 def test_a_start_made_for_another_wrist_lock_is_one_error_line(tmp_path):
@@ -50,18 +41,7 @@ def test_a_start_made_for_another_wrist_lock_is_one_error_line(tmp_path):
 
 def test_train_throw_catch_writes_a_policy_that_evaluate_replays(tmp_path):
     run_dir = tmp_path / "run"
-    result = run_train(
-        "algo=throw_catch",
-        "env.duration=6",
-        "algo.episodes=1",
-        "algo.rollouts=2",
-        "algo.workers=1",
-        "algo.noise_check.seeds=1",
-        "algo.conditions=[{},{action_noise:0.003}]",
-        "progress=false",
-        "record_best=false",
-        f"hydra.run.dir={run_dir}",
-    )
+    result = run_short_search("throw_catch", run_dir, "env.duration=6")
     assert result.returncode == 0, result.stderr
     metrics = json.loads((run_dir / "metrics.json").read_text())
     assert metrics["rollouts"] == 2 and len(metrics["throw_catch"]["knots"]) == 3

@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 from tqdm import tqdm
 
-from jugglerl.checkpoints import CHECKPOINT, save_checkpoint
+from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces import SPACES
@@ -228,7 +228,7 @@ class SearchTraining:
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:
         return {
-            "config": OmegaConf.to_container(self.cfg, resolve=True),
+            **config_entries(self.cfg),
             "deploys": self.deploys,
             "collector": self.collector.state_dict(),
             "update": self.update.state_dict(),

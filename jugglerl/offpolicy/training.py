@@ -28,12 +28,12 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 from tensordict.nn import TensorDictSequential
 from torchrl.collectors import Collector
 from tqdm import tqdm
 
-from jugglerl.checkpoints import CHECKPOINT, save_checkpoint
+from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.config import make_juggle_env
 from jugglerl.offpolicy.actors import build_actor, recurrent_state
 from jugglerl.offpolicy.batch_stats import BatchStats
@@ -258,7 +258,7 @@ class OffPolicyTraining:
     def state_dict(self) -> dict:
         norm = normalisation(self.env)
         return {
-            "config": OmegaConf.to_container(self.cfg, resolve=True),
+            **config_entries(self.cfg),
             "deploys": "actor",
             "actor": self.actor.state_dict(),
             "policy": self.deployed_actor().state_dict(),

@@ -29,8 +29,8 @@ A throw is repeatable because it starts from a settled ball; a catch forgives be
 goes where the ball is. The throw's knots assume the wrist lock they were made with, so the
 env's ``wrist_angles`` must be the policy's (a one-line error otherwise). A policy file is YAML
 of ``kind: throw_catch`` with the ``ThrowCatch`` fields and, optionally, ``env``: the env preset
-it was made for (``configs/env/``), which that error names. Shipped: ``earth_juggler``
-(``env: earth``).
+it was made for (``configs/env/``), which that error names. Shipped: ``earth_expert`` (made by
+hand) and ``earth_juggler`` (searched from it by ``algo=throw_catch``), both ``env: earth``.
 """
 
 from __future__ import annotations
