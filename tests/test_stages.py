@@ -12,7 +12,7 @@ from tensordict import TensorDict
 from test_offpolicy_training import TINY, train
 
 from jugglerl.checkpoints import load_checkpoint
-from jugglerl.offpolicy.stages import stages_from_config
+from jugglerl.offpolicy.stages import resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.training import resume_state
@@ -58,6 +58,17 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert [(s.name, s.end) for s in short] == [("bc", 327680), ("dagger", 340000)]
 
 
+def test_a_resume_says_which_stages_lose_their_demonstrations():
+    stages = stages_from_config(train_config("algo=apprentice", "collector.total_frames=491520"))
+    note = resume_note(stages, 368640)  # after DAgger: the RL stage's demonstrations are gone
+    assert "stage bc collected before frame 368640" in note and "stage rl draws" in note
+    assert "before frame 100000" in resume_note(stages, 100000)  # part of BC's is gone
+    assert resume_note(stages, 0) is None  # a new run
+    assert resume_note(stages, 491520 - 1) is not None
+    (alone,) = stages_from_config(train_config("algo=td3"))
+    assert resume_note([alone], 1024) is None  # no stage draws on demonstrations
+
+
 def test_a_run_without_stages_is_one_stage_of_its_loss():
     (stage,) = stages_from_config(train_config("algo=td3"))
     assert (stage.name, stage.start, stage.end, stage.cfg.algo.loss) == ("td3", 0, 307200, "td3")
@@ -80,7 +91,9 @@ def test_bad_stage_settings_are_named(override, message):
         )
 
 
-def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_stage(tmp_path):
+def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_stage(
+    tmp_path, capsys
+):
     cfg = train_config(*STAGED)
     cfg.collector.total_frames = 256  # stop after the DAgger stage
     metrics, training = train(cfg, tmp_path / "run")
@@ -96,6 +109,7 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
 
     cfg.collector.total_frames = 384
     resumed = OffPolicyTraining(cfg, tmp_path / "run", state)
+    assert "stage rl draws its demo_fraction only from" in capsys.readouterr().err
     assert resumed.stage.name == "dagger"  # where it was saved; the run moves on from there
     for key, value in training.actor.state_dict().items():  # the cloned actor carries over
         torch.testing.assert_close(resumed.actor.state_dict()[key], value)

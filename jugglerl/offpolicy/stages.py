@@ -119,3 +119,18 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
     ):
         raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
     return stages
+
+
+def resume_note(stages: list[Stage], frames: int) -> str | None:
+    """What a run resumed at ``frames`` goes without, or ``None``: checkpoints hold no replay
+    buffers, so the demonstrations collected before ``frames`` are gone, and a stage still to
+    come that draws ``demo_fraction`` of its batches from them draws on less (or nothing)."""
+    gone = [stage.name for stage in stages if stage.demonstrations and stage.start < frames]
+    drawing = [stage.name for stage in stages if stage.demo_fraction and stage.end > frames]
+    if frames == 0 or not gone or not drawing:
+        return None
+    return (
+        f"note: checkpoints hold no replay buffers: the demonstrations of stage"
+        f" {', '.join(gone)} collected before frame {frames} are gone, so stage"
+        f" {', '.join(drawing)} draws its demo_fraction only from those collected from here on"
+    )

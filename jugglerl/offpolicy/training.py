@@ -23,6 +23,7 @@ go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the 
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -49,7 +50,7 @@ from jugglerl.offpolicy.env_stack import (
 from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.losses import LOSSES
-from jugglerl.offpolicy.stages import Stage, stages_from_config
+from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
@@ -90,6 +91,9 @@ class OffPolicyTraining:
         self._enter(self.stages[state.get("stage", 0)] if state else self.stages[0])
         if state is not None:
             self.load_state_dict(state)
+            note = resume_note(self.stages, self.frames)
+            if note:
+                print(note, file=sys.stderr)
 
     def _enter(self, stage: Stage) -> None:
         """Build ``stage``'s loss (on the same actor) and exploration, and the acting policy."""
