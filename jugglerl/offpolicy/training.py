@@ -36,6 +36,7 @@ from tqdm import tqdm
 
 from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.config import make_juggle_env
+from jugglerl.interrupts import deferred_interrupt
 from jugglerl.offpolicy.actors import build_actor, recurrent_state
 from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.buffer import ReplayBuffer
@@ -181,7 +182,9 @@ class OffPolicyTraining:
                 self.frames += batch.numel()
                 self.noise.step(batch.numel())
                 record = {"frames": self.frames, "stage": self.stage.index}
-                record |= self._learn() | self.batch_stats(batch)
+                with deferred_interrupt():  # a Ctrl-C inside a loss is not a clean stop
+                    record |= self._learn()
+                record |= self.batch_stats(batch)
                 self.history.append(record)
                 logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
                 bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
