@@ -5,8 +5,8 @@ TD3's actor losses swap the critic's parameters in with ``TensorDict.to_module``
 manager, and when the interrupt lands inside it, leaving the context raises ``RuntimeError:
 Converting a tensordict to boolean value is not permitted`` in its place (seen in about one
 Ctrl-C in 40 during an update). The trainer then never sees the Ctrl-C, writes no checkpoint and
-the user gets a traceback. Holding the interrupt until the updates of a batch are done (well
-under a second with the defaults) keeps Ctrl-C a clean stop; a second Ctrl-C raises at once.
+the user gets a traceback. Holding the interrupt until the updates of a batch are done keeps
+Ctrl-C a clean stop, at the cost of waiting for them; a second Ctrl-C raises at once.
 """
 
 from __future__ import annotations
