@@ -3,10 +3,11 @@
 A ``KeyboardInterrupt`` raised inside TorchRL's losses can surface as another error: DDPG's and
 TD3's actor losses swap the critic's parameters in with ``TensorDict.to_module`` as a context
 manager, and when the interrupt lands inside it, leaving the context raises ``RuntimeError:
-Converting a tensordict to boolean value is not permitted`` in its place (seen in about one
-Ctrl-C in 40 during an update). The trainer then never sees the Ctrl-C, writes no checkpoint and
-the user gets a traceback. Holding the interrupt until the updates of a batch are done keeps
-Ctrl-C a clean stop, at the cost of waiting for them; a second Ctrl-C raises at once.
+Converting a tensordict to boolean value is not permitted`` in its place (about one Ctrl-C in
+40, sent at random moments of a short DDPG run). The trainer then never sees the Ctrl-C,
+writes no checkpoint and the user gets a traceback. Holding the interrupt until the updates of a
+batch are done keeps Ctrl-C a clean stop, at the cost of waiting for them; a second Ctrl-C
+raises at once.
 """
 
 from __future__ import annotations

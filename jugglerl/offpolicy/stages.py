@@ -127,7 +127,7 @@ def resume_note(stages: list[Stage], frames: int) -> str | None:
     come that draws ``demo_fraction`` of its batches from them draws on less (or nothing)."""
     gone = [stage.name for stage in stages if stage.demonstrations and stage.start < frames]
     drawing = [stage.name for stage in stages if stage.demo_fraction and stage.end > frames]
-    if frames == 0 or not gone or not drawing:
+    if not gone or not drawing:  # a new run (frames 0) has nothing gone
         return None
     return (
         f"note: checkpoints hold no replay buffers: the demonstrations of stage"
