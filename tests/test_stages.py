@@ -45,8 +45,8 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(55.0)
     assert bc.cfg.optim.lr_actor == 1e-3
     assert dagger.cfg.optim.lr_actor == rl.cfg.optim.lr_actor == 1e-4
-    assert bc.cfg.optim.updates_per_batch == 128 and dagger.cfg.optim.updates_per_batch == 32
-    assert rl.cfg.optim.updates_per_batch == 256 and rl.cfg.algo.bc_tau == 0.001
+    assert bc.cfg.optim.updates_per_batch == 256 and dagger.cfg.optim.updates_per_batch == 64
+    assert rl.cfg.optim.updates_per_batch == 512 and rl.cfg.algo.bc_tau == 0.001
     assert rl.actor_frozen(rl.start + 10240) and not rl.actor_frozen(rl.start + 10241)
     assert (
         stages_from_config(
