@@ -24,7 +24,9 @@ STAGED = [
     "collector.total_frames=384",
     "algo.stages.0.until=128",
     "algo.stages.1.until=256",
-    "algo.stages.2.warmup_frames=128",
+    "algo.rl_stage.warmup_frames=128",
+    "algo.rl_stage.demo_fraction=0.25",
+    "algo.rl_stage.bc_weight=1.0",
     "eval.every_frames=0",
 ]
 
@@ -40,14 +42,18 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert bc.cfg.algo.loss == dagger.cfg.algo.loss == "bc" and rl.cfg.algo.loss == "ddpg"
     assert bc.cfg.exploration.centre == "teacher" and bc.cfg.exploration.expert_weight_init == 1
     assert dagger.cfg.exploration.expert_weight_init == 0 and dagger.cfg.exploration.sigma_init == 0
-    assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0.25
-    assert rl.cfg.algo.bc_weight == 100.0 and rl.bc_weight_at(rl.end) == pytest.approx(10.0)
-    assert rl.bc_weight_at((rl.start + rl.end) // 2) == pytest.approx(55.0)
-    assert bc.cfg.optim.lr_actor == 1e-3
-    assert dagger.cfg.optim.lr_actor == rl.cfg.optim.lr_actor == 1e-4
+    assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0
+    assert bc.cfg.optim.trains == dagger.cfg.optim.trains == "base"
+    assert rl.cfg.optim.trains == "correction" and rl.cfg.actor.correction.max_correction == 0.01
+    assert rl.cfg.algo.n_steps == 10 and bc.cfg.algo.n_steps == 1 and rl.cfg.algo.gamma == 0.99
+    # the rl stage's envs are split among the nominal one and each evaluated perturbation
+    assert rl.variants == ({}, *[dict(c) for c in rl.cfg.eval.perturbed.values()])
+    assert bc.variants == dagger.variants == ({},) and len(rl.variants) == 5
+    assert bc.cfg.optim.lr_actor == 1e-3 and dagger.cfg.optim.lr_actor == 1e-4
+    assert rl.cfg.optim.lr_actor == 1e-5 and rl.cfg.optim.lr_critic == 3e-4
     assert bc.cfg.optim.updates_per_batch == 256 and dagger.cfg.optim.updates_per_batch == 64
-    assert rl.cfg.optim.updates_per_batch == 512 and rl.cfg.algo.bc_tau == 0.001
-    assert rl.actor_frozen(rl.start + 10240) and not rl.actor_frozen(rl.start + 10241)
+    assert rl.cfg.optim.updates_per_batch == 128 and rl.cfg.algo.bc_tau == 0.001
+    assert rl.actor_frozen(rl.start + 61440) and not rl.actor_frozen(rl.start + 61441)
     assert (
         stages_from_config(
             train_config("algo=apprentice", "algo.loss=td3", "collector.total_frames=491520")
@@ -59,7 +65,10 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
 
 
 def test_a_resume_says_which_stages_lose_their_demonstrations():
-    stages = stages_from_config(train_config("algo=apprentice", "collector.total_frames=491520"))
+    drawing = "algo.rl_stage.demo_fraction=0.25"
+    stages = stages_from_config(
+        train_config("algo=apprentice", "collector.total_frames=491520", drawing)
+    )
     note = resume_note(stages, 368640)  # after DAgger: the RL stage's demonstrations are gone
     assert "stage bc collected before frame 368640" in note and "stage rl draws" in note
     assert "before frame 100000" in resume_note(stages, 100000)  # part of BC's is gone
@@ -80,14 +89,21 @@ def test_a_run_without_stages_is_one_stage_of_its_loss():
     [
         ("algo.stages.1.until=100", "algo.stages[1].until=100 must be above"),
         ("+algo.stages.0.epochs=3", "algo.stages[0]: unknown keys ['epochs']"),
-        ("algo.stages.2.demo_fraction=1", "algo.stages[2].demo_fraction=1.0 must be in [0, 1)"),
+        ("algo.rl_stage.demo_fraction=1", "algo.stages[2].demo_fraction=1.0 must be in [0, 1)"),
+        ("algo.rl_stage.n_steps=0", "algo.stages[2].n_steps=0 must be >= 1"),
+        ("algo.rl_stage.perturbed=3", "algo.stages[2].perturbed must map names to env"),
         ("algo.stages.0.demonstrations=false", "a demo_fraction needs a stage with demonstrations"),
     ],
 )
 def test_bad_stage_settings_are_named(override, message):
     with pytest.raises(ValueError, match=re.escape(message)):
         stages_from_config(
-            train_config("algo=apprentice", "collector.total_frames=491520", override)
+            train_config(
+                "algo=apprentice",
+                "collector.total_frames=491520",
+                "algo.rl_stage.demo_fraction=0.25",
+                override,
+            )
         )
 
 
@@ -122,6 +138,32 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
     assert "loss_critic" in metrics["history"][-1] and "loss_bc" in metrics["history"][-1]
     for key, value in again.actor.state_dict().items():  # the warm-up kept the actor still
         torch.testing.assert_close(value, actor[key])
+    again.close()
+
+
+def test_the_default_pipeline_trains_only_the_correction_in_rl_and_resumes_inside_it(tmp_path):
+    """BC, DAgger, then two batches of residual RL (no warm-up), killed after the first: the
+    resume continues inside the rl stage, the clone under the correction never moves, the
+    correction does."""
+    cfg = train_config(*STAGED, "algo.rl_stage.warmup_frames=0", "actor=lstm",
+                       "replay_buffer.slice_len=16", "algo.rl_stage.optim.lr_actor=1e-2")
+    cfg.collector.total_frames = 384  # stop after the first rl batch
+    _, first = train(cfg, tmp_path / "run")
+    assert first.stage.name == "rl" and first.stage.cfg.optim.trains == "correction"
+    state = load_checkpoint(tmp_path / "run")
+    assert state["stage"] == 2 and state["counters"]["frames"] == 384
+
+    cfg.collector.total_frames = 512
+    metrics, again = train(cfg, tmp_path / "run", state)
+    assert [h["stage"] for h in metrics["history"]] == [0, 1, 2, 2]
+    assert again.stage.name == "rl" and again.frames == 512
+    weights = again.actor.state_dict()
+    corrections = [k for k in weights if k.startswith("module.2.")]  # lstm, head, correction
+    assert corrections
+    for key, value in state["actor"].items():
+        if key not in corrections:  # the clone under the correction
+            assert torch.equal(weights[key], value), key
+    assert any(not torch.equal(weights[k], state["actor"][k]) for k in corrections)
     again.close()
 
 

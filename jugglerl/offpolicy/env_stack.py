@@ -28,6 +28,8 @@ the time features and the ball clock on their own, so that a trained actor runs 
 
 from __future__ import annotations
 
+from functools import partial
+
 import gymnasium as gym
 import torch
 from omegaconf import DictConfig, OmegaConf
@@ -85,8 +87,12 @@ class NumericInfo(gym.Wrapper):
         return numeric
 
 
-def make_vector_env(env_cfg: DictConfig, num_envs: int) -> gym.vector.VectorEnv:
-    """``num_envs`` juggling envs from a ``configs/env`` group, stepped in this process.
+def make_vector_env(
+    env_cfg: DictConfig, num_envs: int, variants: list[dict] | None = None
+) -> gym.vector.VectorEnv:
+    """``num_envs`` juggling envs from a ``configs/env`` group, stepped in this process; with
+    ``variants`` (env arguments), env ``i`` runs with ``variants[i % len(variants)]`` on top,
+    so a batch meets each variant (a perturbation, or ``{}`` for none) in equal shares.
 
     Without auto-reset: TorchRL resets finished envs itself (``_reset`` masks), so each
     transition's next observation is the true last one and no terminal-observation reader runs
@@ -95,17 +101,28 @@ def make_vector_env(env_cfg: DictConfig, num_envs: int) -> gym.vector.VectorEnv:
     if num_envs < 1:
         raise ValueError(f"collector.num_envs={num_envs} must be >= 1")
     kwargs = OmegaConf.to_container(env_cfg, resolve=True)
+    autoreset = {"autoreset_mode": gym.vector.AutoresetMode.DISABLED}
     try:
-        return gym.make_vec(
-            ENV_ID,
-            num_envs=num_envs,
-            vectorization_mode="sync",
-            vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.DISABLED},
-            wrappers=[NumericInfo],
-            **kwargs,
-        )
+        if not variants:
+            return gym.make_vec(
+                ENV_ID,
+                num_envs=num_envs,
+                vectorization_mode="sync",
+                vector_kwargs=autoreset,
+                wrappers=[NumericInfo],
+                **kwargs,
+            )
+        makers = [
+            partial(_numeric_env, {**kwargs, **variants[index % len(variants)]})
+            for index in range(num_envs)
+        ]
+        return gym.vector.SyncVectorEnv(makers, **autoreset)
     except TypeError as error:  # an unknown key in the env group
         raise ValueError(f"env config: {error}") from None
+
+
+def _numeric_env(kwargs: dict) -> gym.Env:
+    return NumericInfo(gym.make(ENV_ID, **kwargs))
 
 
 def _harmonics(state_cfg: DictConfig) -> int:
@@ -152,14 +169,16 @@ def make_env(
     num_envs: int,
     loc: torch.Tensor | None = None,
     scale: torch.Tensor | None = None,
+    variants: list[dict] | None = None,
 ) -> EnvBase:
-    """The batched env of ``cfg.env`` under the transform stack (see the module docstring), with
-    the recurrent state of the actor ``cfg.actor`` primed.
+    """The batched env of ``cfg.env`` (its envs split among ``variants``, see
+    ``make_vector_env``) under the transform stack (see the module docstring), with the
+    recurrent state of the actor ``cfg.actor`` primed.
 
     Pass the ``loc``/``scale`` of a trained run to reuse its normalisation; otherwise it is
     fitted on ``cfg.state.norm_frames`` random steps.
     """
-    env = TransformedEnv(GymWrapper(make_vector_env(cfg.env, num_envs)))
+    env = TransformedEnv(GymWrapper(make_vector_env(cfg.env, num_envs, variants)))
     info_specs = {key: Unbounded((num_envs,), dtype=dtype) for key, dtype in INFO_KEYS.items()}
     info_specs["physics_error"] = Unbounded((num_envs,), dtype=torch.bool)
     env.base_env.set_info_dict_reader(default_info_dict_reader(list(info_specs), spec=info_specs))

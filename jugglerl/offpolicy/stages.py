@@ -16,6 +16,11 @@ then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
 | ``demonstrations`` | the stage's frames are kept as demonstrations too (a buffer of their own) |
 | ``demo_fraction`` | fraction of each sampled batch drawn from the demonstrations |
 | ``warmup_frames`` | the actor stays still for the stage's first frames (its critic learns first) |
+| ``trains`` | the part of the actor the stage's updates train: ``base`` (default), or the
+  ``correction`` on top of a frozen base (``actor.correction``) |
+| ``n_steps`` | RL stages: critic targets from this many steps of rewards (default 1) |
+| ``perturbed`` | name: env arguments (as ``eval.perturbed``); the stage's envs are split evenly
+  among the nominal env and these, so it trains under what evaluations judge |
 
 Without ``algo.stages`` a run is one stage made of ``algo.loss`` and the exploration group.
 """
@@ -23,6 +28,7 @@ Without ``algo.stages`` a run is one stage made of ``algo.loss`` and the explora
 from __future__ import annotations
 
 import copy
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
@@ -38,6 +44,9 @@ STAGE_KEYS = {
     "demonstrations",
     "demo_fraction",
     "warmup_frames",
+    "trains",
+    "n_steps",
+    "perturbed",
 }
 
 
@@ -55,6 +64,8 @@ class Stage:
     demonstrations: bool
     demo_fraction: float
     warmup_frames: int
+    #: env arguments the stage's envs are split among (``[{}]``: all nominal)
+    variants: tuple[dict, ...] = ({},)
 
     def bc_weight_at(self, frames: int) -> float:
         """The cloning weight after ``frames`` frames of the run."""
@@ -97,6 +108,10 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage_cfg.algo.bc_weight = bc_weight
         for group in ("exploration", "optim"):
             stage_cfg[group] = OmegaConf.merge(cfg[group], spec.get(group, {}))
+        stage_cfg.optim.trains = str(spec.get("trains", "base"))
+        stage_cfg.algo.n_steps = int(spec.get("n_steps", cfg.algo.get("n_steps", 1)))
+        if stage_cfg.algo.n_steps < 1:
+            raise ValueError(f"{where}.n_steps={stage_cfg.algo.n_steps} must be >= 1")
         fraction = float(spec.get("demo_fraction", 0.0))
         if not 0 <= fraction < 1:
             raise ValueError(f"{where}.demo_fraction={fraction} must be in [0, 1)")
@@ -111,6 +126,7 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
                 demonstrations=bool(spec.get("demonstrations", False)),
                 demo_fraction=fraction,
                 warmup_frames=int(spec.get("warmup_frames", 0)),
+                variants=_variants(spec.get("perturbed"), where),
             )
         )
         start = int(end)
@@ -119,6 +135,16 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
     ):
         raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
     return stages
+
+
+def _variants(perturbed, where: str) -> tuple[dict, ...]:
+    """The nominal env and each condition of a stage's ``perturbed`` mapping."""
+    if not perturbed:
+        return ({},)
+    if not isinstance(perturbed, Mapping):
+        raise ValueError(f"{where}.perturbed must map names to env arguments")
+    conditions = OmegaConf.to_container(OmegaConf.create(dict(perturbed)), resolve=True)
+    return ({}, *conditions.values())
 
 
 def resume_note(stages: list[Stage], frames: int) -> str | None:

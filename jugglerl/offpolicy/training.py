@@ -50,7 +50,9 @@ from jugglerl.offpolicy.env_stack import (
 )
 from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
+from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights
 from jugglerl.offpolicy.losses import LOSSES
+from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule
 from jugglerl.policies.actor import ActorPolicy
@@ -73,12 +75,18 @@ class OffPolicyTraining:
         self.cfg = cfg
         self.run_dir = Path(run_dir)
         torch.manual_seed(cfg.seed)
-        norm = state["normalisation"] if state is not None else {"loc": None, "scale": None}
-        self.env = make_env(cfg, cfg.collector.num_envs, norm["loc"], norm["scale"])
+        start = initial_weights(cfg) if state is None and cfg.get("init_actor") else None
+        norm = (state or start or {}).get("normalisation", {"loc": None, "scale": None})
+        self.stages = stages_from_config(cfg)
+        first = self.stages[state.get("stage", 0)] if state else self.stages[0]
+        self.env = make_env(
+            cfg, cfg.collector.num_envs, norm["loc"], norm["scale"], list(first.variants)
+        )
         self.actor = build_actor(cfg.actor, state_size(cfg.state), ACTION_SIZE)
+        if start is not None:
+            load_base_weights(self.actor, start["policy"], cfg.init_actor)
         self.recurrent = bool(recurrent_state(cfg.actor))
         self.teacher = self._teacher()
-        self.stages = stages_from_config(cfg)
         self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
         self.demonstrations = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
         self.evaluations = Evaluations(cfg)
@@ -89,7 +97,7 @@ class OffPolicyTraining:
         self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
         self.recording_id: str | None = None
         # a checkpoint holds the loss and exploration of the stage it was saved in
-        self._enter(self.stages[state.get("stage", 0)] if state else self.stages[0])
+        self._enter(first)
         if state is not None:
             self.load_state_dict(state)
             note = resume_note(self.stages, self.frames)
@@ -159,9 +167,19 @@ class OffPolicyTraining:
         for stage in self.stages[self.stage.index :]:
             if stage is not self.stage:
                 self.actor.load_state_dict(self.current_actor().state_dict())
+                if stage.variants != self.stage.variants:
+                    self._perturb(stage.variants)
                 self._enter(stage)
             if self.frames < stage.end:
                 self._train_stage(logger, bar)
+
+    def _perturb(self, variants: tuple[dict, ...]) -> None:
+        """New envs split among ``variants`` (a stage's ``perturbed``), same normalisation."""
+        norm = normalisation(self.env)
+        self.env.close()
+        collect = self.cfg.collector
+        loc, scale = norm.loc.clone(), norm.scale.clone()
+        self.env = make_env(self.cfg, collect.num_envs, loc, scale, list(variants))
 
     def _train_stage(self, logger: RerunLogger, bar: tqdm) -> None:
         collect = self.cfg.collector
@@ -175,7 +193,10 @@ class OffPolicyTraining:
             init_random_frames=max(0, collect.init_random_frames - self.frames),
         )
         try:
+            algo = self.stage.cfg.algo
             for batch in collector:
+                stats = self.batch_stats(batch)  # of the steps as played
+                batch = n_step_returns(batch, algo.n_steps, algo.get("gamma", 1.0))
                 self.buffer.extend(batch)
                 if self.stage.demonstrations:
                     self.demonstrations.extend(batch)
@@ -184,7 +205,7 @@ class OffPolicyTraining:
                 record = {"frames": self.frames, "stage": self.stage.index}
                 with deferred_interrupt():  # a Ctrl-C inside a loss is not a clean stop
                     record |= self._learn()
-                record |= self.batch_stats(batch)
+                record |= stats
                 self.history.append(record)
                 logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
                 bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})

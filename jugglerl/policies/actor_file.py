@@ -14,23 +14,42 @@ from pathlib import Path
 import yaml
 
 from jugglerl.commands import CommandError
+from jugglerl.policies.files import read_policy_file
 
 #: The parts of a run's config an actor policy needs (``ActorPolicy.from_config``).
 CONFIG_KEYS = ("actor", "state", "env")
 
 
-def actor_policy_from_dict(data: dict, source: str):
-    """The ``ActorPolicy`` of a ``kind: actor`` file read from ``source``."""
+def _weights_from_dict(data: dict, source: str) -> dict:
     import torch  # only actor files need it
 
-    from jugglerl.policies.actor import ActorPolicy
-
-    if "weights" not in data:
-        raise CommandError(f"{source}: a kind: actor file needs 'weights: FILE.pt'")
+    if data.get("kind") != "actor" or "weights" not in data:
+        raise CommandError(f"{source}: not a kind: actor file with 'weights: FILE.pt'")
     path = Path(source).parent / data["weights"]
     if not path.is_file():
         raise CommandError(f"{source}: no weights file at {path}")
-    return ActorPolicy.from_state(torch.load(path, weights_only=False))
+    return torch.load(path, weights_only=False)
+
+
+def actor_policy_from_dict(data: dict, source: str):
+    """The ``ActorPolicy`` of a ``kind: actor`` file read from ``source``."""
+    from jugglerl.policies.actor import ActorPolicy
+
+    return ActorPolicy.from_state(_weights_from_dict(data, source))
+
+
+def read_actor_weights(spec: str) -> dict:
+    """``config``, deployed ``policy`` weights and ``normalisation`` of a shipped actor name, a
+    ``kind: actor`` file or an off-policy run (its directory or ``checkpoint.pt``)."""
+    path = Path(spec)
+    if path.suffix == ".pt" or path.is_dir():
+        from jugglerl.checkpoints import load_checkpoint
+
+        state = load_checkpoint(path)
+        if state["deploys"] != "actor":
+            raise CommandError(f"{spec}: the run deploys {state['deploys']}, not an actor")
+        return state
+    return _weights_from_dict(*read_policy_file(spec))
 
 
 def write_actor_policy(state: dict, folder: Path, name: str, header: str) -> Path:

@@ -7,7 +7,11 @@ Each module registers a class in ``ACTORS`` (chosen by ``actor.name``) with
 - ``recurrent_state(actor_cfg) -> dict``: the recurrent state it carries between steps, as
   ``{key: shape}`` (empty for a feed-forward actor). The env stack adds zero states on reset
   for these keys (``primer``), updates run the actor in recurrent mode on sub-trajectories, and
-  ``ActorPolicy`` carries them from step to step.
+  ``ActorPolicy`` carries them from step to step;
+- ``features(actor_cfg) -> dict``: what it computes on the way that a correction may read, as
+  ``{key: size}`` (an LSTM's ``memory``; empty for a feed-forward actor).
+
+Any actor can carry a bounded correction on top (``actor.correction``, ``correction.py``).
 
 Adding one: a module here and a ``configs/actor/NAME.yaml``.
 """
@@ -18,6 +22,7 @@ from omegaconf import DictConfig
 from torchrl.data import Unbounded
 from torchrl.envs import TensorDictPrimer
 
+from jugglerl.offpolicy.actors.correction import corrected
 from jugglerl.registry import Registry
 
 ACTORS = Registry("actor", __name__)
@@ -30,6 +35,10 @@ class FeedForward:
     def recurrent_state(actor_cfg: DictConfig) -> dict[str, tuple[int, ...]]:
         return {}
 
+    @staticmethod
+    def features(actor_cfg: DictConfig) -> dict[str, int]:
+        return {}
+
 
 def recurrent_state(actor_cfg: DictConfig) -> dict[str, tuple[int, ...]]:
     """The recurrent state of the actor ``actor_cfg`` names."""
@@ -37,7 +46,13 @@ def recurrent_state(actor_cfg: DictConfig) -> dict[str, tuple[int, ...]]:
 
 
 def build_actor(actor_cfg: DictConfig, state_size: int, action_size: int):
-    return ACTORS.get(actor_cfg.name).build(actor_cfg, state_size, action_size)
+    """The actor ``actor_cfg.name`` names, with ``actor_cfg.correction`` on top when set."""
+    kind = ACTORS.get(actor_cfg.name)
+    actor = kind.build(actor_cfg, state_size, action_size)
+    correction_cfg = actor_cfg.get("correction")
+    if correction_cfg is None:
+        return actor
+    return corrected(actor, correction_cfg, state_size, action_size, kind.features(actor_cfg))
 
 
 def primer(actor_cfg: DictConfig) -> TensorDictPrimer | None:

@@ -24,6 +24,10 @@ class LSTMActor:
         return {HIDDEN: (1, actor_cfg.hidden_size), CELL: (1, actor_cfg.hidden_size)}
 
     @staticmethod
+    def features(actor_cfg) -> dict[str, int]:
+        return {"memory": actor_cfg.hidden_size}
+
+    @staticmethod
     def build(actor_cfg, state_size: int, action_size: int) -> TensorDictSequential:
         lstm = LSTMModule(
             input_size=state_size,

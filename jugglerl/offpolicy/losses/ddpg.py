@@ -1,6 +1,7 @@
-"""``ddpg``: TorchRL's ``DDPGLoss`` (the paper's method), TD(0) targets from target networks.
+"""``ddpg``: TorchRL's ``DDPGLoss`` (the paper's method), TD targets from target networks.
 
-The critic regresses ``r + γ (1 - terminated) Q'(s', μ'(s'))`` (``algo.gamma``); the actor climbs
+The critic regresses ``r + γ^m (1 - terminated) Q'(s', μ'(s'))`` (``algo.gamma``; ``m``: the
+transition's ``steps_to_next_obs``, ``jugglerl.offpolicy.n_step``); the actor climbs
 ``Q(s, μ(s))``, plus ``algo.bc_weight`` times the behaviour-cloning loss when it is positive; both
 targets then move by ``algo.tau``. With a recurrent actor the batch is ``[sub-trajectories,
 time]`` and the actor runs in recurrent mode.

@@ -1,6 +1,8 @@
 """``td3``: TorchRL's ``TD3Loss``: twin critics, target policy smoothing, delayed actor updates.
 
-The critics regress ``r + γ (1 - terminated) min_k Q'_k(s', μ'(s') + clip(σ ε, ±c))`` with
+The ``critic.ensemble`` critics (2: TD3's twins) each regress
+``r + γ^m (1 - terminated) min_k Q'_k(s', μ'(s') + clip(σ ε, ±c))`` (``m``: the transition's
+``steps_to_next_obs``, ``jugglerl.offpolicy.n_step``) with
 ``σ = algo.policy_noise`` and ``c = algo.noise_clip`` (normalised action units); the actor
 (plus ``algo.bc_weight`` times the behaviour-cloning loss) and the targets move only every
 ``algo.policy_delay`` updates.
@@ -30,7 +32,7 @@ class TD3(Update):
             actor,
             critic,
             bounds=(-1.0, 1.0),  # the actions' range (the env's spec is batched)
-            num_qvalue_nets=2,
+            num_qvalue_nets=cfg.critic.get("ensemble", 2),
             policy_noise=algo.policy_noise,
             noise_clip=algo.noise_clip,
             loss_function="l2",

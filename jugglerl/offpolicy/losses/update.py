@@ -14,6 +14,8 @@ from omegaconf import DictConfig
 from tensordict.nn import TensorDictModule
 from torchrl.objectives import LossModule, SoftUpdate
 
+from jugglerl.offpolicy.actors.correction import trained_parameters
+
 
 class FlatSoftUpdate(SoftUpdate):
     """``SoftUpdate`` that moves all targets with one ``foreach`` lerp over cached tensor lists.
@@ -48,9 +50,11 @@ def check_rl_config(algo: DictConfig) -> None:
 
 
 class Update:
-    """Adam for the actor (``optim.lr_actor``) and, given ``critic_params``, for the critics
-    (``optim.lr_critic``, ``optim.weight_decay``); clipping at ``optim.max_grad_norm``
-    (``null``: none); soft targets of ``loss`` with ``algo.tau`` when it has targets."""
+    """Adam for the part of the actor the stage trains (``optim.trains``: its base or its
+    correction, ``jugglerl.offpolicy.actors.correction``; ``optim.lr_actor``) and, given
+    ``critic_params``, for the critics (``optim.lr_critic``, ``optim.weight_decay``); clipping
+    at ``optim.max_grad_norm`` (``null``: none); soft targets of ``loss`` with ``algo.tau`` when
+    it has targets."""
 
     def __init__(
         self,
@@ -61,6 +65,8 @@ class Update:
         tau: float | None,
     ):
         self.loss = loss
+        trains = optim_cfg.get("trains", "base")
+        actor_params = trained_parameters(loss.actor_network, actor_params, trains)
         self.actor_optimiser = torch.optim.Adam(actor_params, lr=optim_cfg.lr_actor)
         self.critic_optimiser = (
             None
@@ -84,20 +90,20 @@ class Update:
 
     def apply(self, total: torch.Tensor, step_actor: bool = True) -> None:
         """Back-propagate ``total``, clip, step the optimisers (the actor's only when
-        ``step_actor`` and not ``actor_frozen``) and, after an actor step, the targets."""
+        ``step_actor`` and not ``actor_frozen``) and, with ``step_actor``, the targets (a frozen
+        actor's target stays equal to it)."""
         for optimiser in self.optimisers:
             optimiser.zero_grad()
         total.backward()
         if self.max_grad_norm is not None:
             for params in self.clipped_groups:
                 torch.nn.utils.clip_grad_norm_(params, self.max_grad_norm)
-        step_actor = step_actor and not self.actor_frozen
-        if step_actor:
+        if step_actor and not self.actor_frozen:
             self.actor_optimiser.step()
         if self.critic_optimiser is not None:
             self.critic_optimiser.step()
-        if step_actor and self.targets is not None:
-            self.targets.step()
+        if step_actor and self.targets is not None:  # during a warm-up too: the critics'
+            self.targets.step()  # targets must follow them for values to reach past n steps
 
     def target_actor(self) -> TensorDictModule:
         """A copy of the actor carrying the target (Polyak-averaged) weights."""

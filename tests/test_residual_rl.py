@@ -1,0 +1,187 @@
+"""Residual RL's parts: a correction on a frozen actor, n-step targets, the critic ensemble's
+target, perturbed training envs, and a run started from a shipped actor."""
+
+import pytest
+import torch
+from cli import train_config
+from tensordict import TensorDict
+from test_losses import transitions
+from test_offpolicy_training import TINY
+
+from jugglerl.offpolicy.actors import build_actor
+from jugglerl.offpolicy.actors.correction import BASE_ACTION, Correction
+from jugglerl.offpolicy.env_stack import state_size
+from jugglerl.offpolicy.n_step import n_step_returns
+from jugglerl.offpolicy.training import OffPolicyTraining
+from jugglerl.policies.actor_file import read_actor_weights
+
+CORRECTED = [
+    "actor=lstm",
+    "++actor.correction.hidden=[16]",
+    "++actor.correction.max_correction=0.05",
+]
+
+
+def correction_of(actor) -> Correction:
+    return next(m for m in actor.modules() if isinstance(m, Correction))
+
+
+def test_a_corrected_actor_starts_exactly_at_its_base():
+    cfg = train_config(*CORRECTED)
+    size = state_size(cfg.state)
+    torch.manual_seed(0)
+    corrected = build_actor(cfg.actor, size, 3)
+    base = build_actor(train_config("actor=lstm", "~actor.correction").actor, size, 3)
+    base.load_state_dict(corrected.state_dict(), strict=False)
+    states = TensorDict(
+        {
+            "state": torch.randn(64, size),
+            "recurrent_state_h": torch.randn(64, 1, 128),
+            "recurrent_state_c": torch.randn(64, 1, 128),
+            "is_init": torch.zeros(64, 1, dtype=torch.bool),
+        },
+        [64],
+    )
+    ours, theirs = corrected(states.clone()), base(states.clone())
+    assert torch.equal(ours["action"], theirs["action"])
+    assert torch.equal(ours[BASE_ACTION], theirs["action"])
+
+
+def test_the_correction_stays_within_its_bound_and_reaches_it():
+    cfg = train_config(*CORRECTED)
+    actor = build_actor(cfg.actor, state_size(cfg.state), 3)
+    body = correction_of(actor).body
+    torch.nn.init.normal_(body[-1].weight, std=10.0)
+    size = state_size(cfg.state)
+    data = actor(
+        TensorDict(
+            {
+                "state": torch.randn(256, size),
+                "recurrent_state_h": torch.zeros(256, 1, 128),
+                "recurrent_state_c": torch.zeros(256, 1, 128),
+                "is_init": torch.ones(256, 1, dtype=torch.bool),
+            },
+            [256],
+        )
+    )
+    step = (data["action"] - data[BASE_ACTION]).abs()
+    inside = data[BASE_ACTION].abs() < 0.9  # away from the [-1, 1] clip
+    assert step.max() <= 0.05 + 1e-6 and step[inside].max() > 0.049
+
+
+@pytest.mark.parametrize("algo", ["ddpg", "td3"])
+def test_updates_of_the_correction_never_move_the_base(algo):
+    _, actor, update, data = transitions(
+        f"algo={algo}", *CORRECTED, "+optim.trains=correction", "optim.lr_actor=1e-2"
+    )
+    correction = {id(p) for p in correction_of(actor).parameters()}
+    before = {name: p.detach().clone() for name, p in actor.named_parameters()}
+    batch = data[:, :16]  # 2 sub-trajectories of 16 steps
+    for _ in range(4):
+        update(batch)
+    moved = {
+        name for name, p in actor.named_parameters() if not torch.equal(p, before[name])
+    }
+    owned = {name for name, p in actor.named_parameters() if id(p) in correction}
+    assert moved and moved <= owned
+
+
+def test_a_stage_training_the_correction_needs_one():
+    with pytest.raises(ValueError, match="trains=correction needs an actor with actor.correction"):
+        transitions("actor=lstm", "+optim.trains=correction")
+
+
+def test_n_step_returns_on_a_hand_made_trajectory():
+    steps = 6
+    done = torch.zeros(1, steps, 1, dtype=torch.bool)
+    done[0, 3] = True  # the episode ends with step 3; a new one starts at step 4
+    batch = TensorDict(
+        {
+            "position": torch.arange(steps).view(1, steps, 1).float(),
+            "next": {
+                "position": torch.arange(1, steps + 1).view(1, steps, 1).float(),
+                "reward": torch.arange(1.0, steps + 1).view(1, steps, 1),
+                "done": done,
+                "terminated": done.clone(),
+            },
+        },
+        [1, steps],
+    )
+    out = n_step_returns(batch, 3, 0.5)
+    # t=0: 1 + 0.5 * 2 + 0.25 * 3; t=1 meets the end at step 3; t=4 meets the batch's end
+    expected = [2.75, 2 + 1.5 + 1, 3 + 2, 4, 5 + 3, 6]
+    assert out["next", "reward"].flatten().tolist() == expected
+    assert out["steps_to_next_obs"].flatten().tolist() == [3, 3, 2, 1, 2, 1]
+    assert out["next", "position"].flatten().tolist() == [3, 4, 4, 4, 6, 6]
+    assert out["next", "terminated"].flatten().tolist() == [0, 1, 1, 1, 0, 0]
+
+
+def test_a_one_step_batch_only_gains_its_step_count():
+    batch = TensorDict({"next": {"reward": torch.ones(2, 5, 1)}}, [2, 5])
+    out = n_step_returns(batch, 1, 0.9)
+    assert out["steps_to_next_obs"].unique().tolist() == [1]
+    assert torch.equal(out["next", "reward"], torch.ones(2, 5, 1))
+
+
+@pytest.mark.parametrize("algo", ["ddpg", "td3"])
+def test_the_critic_target_is_the_documented_one(algo):
+    """DDPG: ``r + γ^m (1 - terminated) Q'(s', μ'(s'))``; TD3 with an ensemble of 3 critics and
+    no smoothing noise: the same with the minimum over the 3 target critics."""
+    ensemble = ["critic.ensemble=3", "algo.policy_noise=0.0"] if algo == "td3" else []
+    _, actor, update, data = transitions(f"algo={algo}", "critic.layer_norm=true", *ensemble)
+    batch = n_step_returns(data[:, :16].clone(), 4, 0.9).reshape(-1)
+    batch["next", "terminated"][::5] = True
+    loss = update.loss
+    loss.make_value_estimator(gamma=0.9)
+    _, info = loss.value_loss(batch.clone()) if algo == "td3" else loss.loss_value(batch.clone())
+
+    following = batch["next"].clone()
+    with loss.target_actor_network_params.to_module(loss.actor_network):
+        following = loss.actor_network(following)
+    if algo == "ddpg":
+        values = _q(loss.value_network, loss.target_value_network_params, following)
+    else:
+        params = loss.target_qvalue_network_params
+        assert params.batch_size[0] == 3
+        values = torch.stack([_q(loss.qvalue_network, params[k], following) for k in range(3)])
+        values = values.min(0).values
+    reward = batch["next", "reward"].squeeze(-1)
+    alive = (~batch["next", "terminated"]).squeeze(-1).float()
+    discount = 0.9 ** batch["steps_to_next_obs"].squeeze(-1).float()
+    torch.testing.assert_close(info["target_value"], reward + discount * alive * values)
+
+
+def _q(network, params, data):
+    with params.to_module(network):
+        return network(data.clone())["state_action_value"].squeeze(-1)
+
+
+def test_a_perturbed_stage_splits_its_envs_among_the_conditions(tmp_path):
+    conditions = "{noisy: {action_noise: 0.01}, kicked: {kick_rate: 1.0}}"
+    perturbed = f"+algo.stages=[{{name: rl, perturbed: {conditions}}}]"
+    cfg = train_config(*TINY, "collector.num_envs=3", "collector.frames_per_batch=129", perturbed)
+    training = OffPolicyTraining(cfg, tmp_path)
+    envs = training.env.base_env._env.envs
+    noise = [env.unwrapped.action_noise for env in envs]
+    kicks = [env.unwrapped.kick_rate for env in envs]
+    assert (noise, kicks) == ([0.0, 0.01, 0.0], [0.0, 0.0, 1.0])
+    training.close()
+
+
+def test_a_run_starts_from_a_shipped_actor(tmp_path):
+    tiny = [o for o in TINY if not o.startswith("algo=")]
+    tiny += ["actor=lstm", "+experiment=finetune", "replay_buffer.slice_len=16"]
+    cfg = train_config(*tiny, "collector.total_frames=128")
+    training = OffPolicyTraining(cfg, tmp_path)
+    shipped = read_actor_weights("lstm_juggler")
+    for key, value in shipped["policy"].items():
+        assert torch.equal(training.actor.state_dict()[key], value)
+    norm = training.actor_policy(training.actor).transforms
+    assert any(
+        torch.equal(getattr(t, "loc", torch.empty(0)), shipped["normalisation"]["loc"])
+        for t in norm
+    )
+    training.close()
+    other = train_config(*tiny, "state.period=3.0")
+    with pytest.raises(ValueError, match="init_actor=lstm_juggler: its state differs in period"):
+        OffPolicyTraining(other, tmp_path)
