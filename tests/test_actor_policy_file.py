@@ -62,3 +62,25 @@ def test_an_actor_file_without_its_weights_is_a_one_line_error(tmp_path):
     (tmp_path / "lost.yaml").write_text("kind: actor\nweights: lost.pt\n")
     with make_juggle_env(train_config().env) as env, pytest.raises(ValueError, match="no weights"):
         load_policy(str(tmp_path / "lost.yaml"), env)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"PK\x03\x04 cut short", "not a readable weights file"),
+        (None, "not an actor's weights (no config, normalisation)"),
+    ],
+)
+def test_an_actor_file_with_broken_or_foreign_weights_is_a_one_line_error(
+    tmp_path, content, message
+):
+    weights = tmp_path / "odd.pt"
+    if content is None:
+        torch.save({"policy": {}}, weights)  # another program's file
+    else:
+        weights.write_bytes(content)
+    (tmp_path / "odd.yaml").write_text("kind: actor\nweights: odd.pt\n")
+    with make_juggle_env(train_config().env) as env, pytest.raises(ValueError) as raised:
+        load_policy(str(tmp_path / "odd.yaml"), env)
+    assert str(raised.value).startswith(f"{weights}: {message}")  # the torch error follows
+    assert "\n" not in str(raised.value)

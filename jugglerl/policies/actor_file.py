@@ -18,6 +18,8 @@ from jugglerl.policies.files import read_policy_file
 
 #: The parts of a run's config an actor policy needs (``ActorPolicy.from_config``).
 CONFIG_KEYS = ("actor", "state", "env")
+#: What a weights file holds (``write_actor_policy`` writes them).
+WEIGHT_KEYS = ("config", "policy", "normalisation")
 
 
 def _weights_from_dict(data: dict, source: str) -> dict:
@@ -28,7 +30,14 @@ def _weights_from_dict(data: dict, source: str) -> dict:
     path = Path(source).parent / data["weights"]
     if not path.is_file():
         raise CommandError(f"{source}: no weights file at {path}")
-    return torch.load(path, weights_only=False)
+    try:
+        weights = torch.load(path, weights_only=False)
+    except Exception as error:  # truncated, or not a torch file: pickle, zip and EOF errors
+        raise CommandError(f"{path}: not a readable weights file ({error})") from None
+    missing = [key for key in WEIGHT_KEYS if not isinstance(weights, dict) or key not in weights]
+    if missing:
+        raise CommandError(f"{path}: not an actor's weights (no {', '.join(missing)})")
+    return weights
 
 
 def actor_policy_from_dict(data: dict, source: str):
