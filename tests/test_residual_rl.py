@@ -1,5 +1,8 @@
 """Residual RL's parts: a correction on a frozen actor, n-step targets, the critic ensemble's
-target, perturbed training envs, and a run started from a shipped actor."""
+target, the pessimistic actor objective, perturbed training envs, and a run started from a
+shipped actor."""
+
+import re
 
 import pytest
 import torch
@@ -69,10 +72,12 @@ def test_the_correction_stays_within_its_bound_and_reaches_it():
     assert step.max() <= 0.05 + 1e-6 and step[inside].max() > 0.049
 
 
-@pytest.mark.parametrize("algo", ["ddpg", "td3"])
-def test_updates_of_the_correction_never_move_the_base(algo):
+@pytest.mark.parametrize(
+    "loss", [["algo=ddpg"], ["algo=td3"], ["algo=td3", "algo.pessimism=1.0"]], ids=str
+)
+def test_updates_of_the_correction_never_move_the_base(loss):
     _, actor, update, data = transitions(
-        f"algo={algo}", *CORRECTED, "+optim.trains=correction", "optim.lr_actor=1e-2"
+        *loss, *CORRECTED, "+optim.trains=correction", "optim.lr_actor=1e-2"
     )
     correction = {id(p) for p in correction_of(actor).parameters()}
     before = {name: p.detach().clone() for name, p in actor.named_parameters()}
@@ -149,6 +154,22 @@ def test_the_critic_target_is_the_documented_one(algo):
     alive = (~batch["next", "terminated"]).squeeze(-1).float()
     discount = 0.9 ** batch["steps_to_next_obs"].squeeze(-1).float()
     torch.testing.assert_close(info["target_value"], reward + discount * alive * values)
+
+
+def test_the_pessimistic_actor_objective_is_the_ensembles_mean_less_its_spread():
+    _, actor, update, data = transitions("algo=td3", "critic.ensemble=3", "algo.pessimism=2.0")
+    batch = data.reshape(-1)
+    objective = update.ensemble_objective(batch)
+    loss = update.loss
+    acted = actor(batch.select(*actor.in_keys, strict=False).clone())
+    params = loss.qvalue_network_params
+    values = torch.stack([_q(loss.qvalue_network, params[k], acted) for k in range(3)])
+    torch.testing.assert_close(objective, values.mean(0) - 2.0 * values.std(0))
+    objective.mean().backward()  # the actor's gradient only: the critics stay as they are
+    assert all(p.grad is None for p in params.values(True, True))
+    assert all(p.grad is not None for p in loss.actor_network_params.values(True, True))
+    with pytest.raises(ValueError, match=re.escape("algo.pessimism=-1.0 must be >= 0 or null")):
+        transitions("algo=td3", "algo.pessimism=-1.0")
 
 
 def _q(network, params, data):

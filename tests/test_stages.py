@@ -44,7 +44,7 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert dagger.cfg.exploration.expert_weight_init == 0 and dagger.cfg.exploration.sigma_init == 0
     assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0
     assert bc.cfg.optim.trains == dagger.cfg.optim.trains == "base"
-    assert rl.cfg.optim.trains == "correction" and rl.cfg.actor.correction.max_correction == 0.01
+    assert rl.cfg.optim.trains == "correction" and rl.cfg.actor.correction.max_correction == 0.002
     assert rl.cfg.algo.n_steps == 10 and bc.cfg.algo.n_steps == 1 and rl.cfg.algo.gamma == 0.99
     # the rl stage's envs are split among the nominal one and each evaluated perturbation
     assert rl.variants == ({}, *[dict(c) for c in rl.cfg.eval.perturbed.values()])

@@ -6,10 +6,16 @@ The ``critic.ensemble`` critics (2: TD3's twins) each regress
 ``σ = algo.policy_noise`` and ``c = algo.noise_clip`` (normalised action units); the actor
 (plus ``algo.bc_weight`` times the behaviour-cloning loss) and the targets move only every
 ``algo.policy_delay`` updates.
+
+The actor climbs the first critic (TD3's), or with ``algo.pessimism`` = β the ensemble's
+``mean_k Q_k(s, μ(s)) - β std_k Q_k(s, μ(s))``: where the critics disagree (actions the data
+hardly covers, such as the small corrections of a residual RL stage) the gradient is their
+uncertainty's, not one critic's noise (ensemble pessimism, as in SAC-N/EDAC).
 """
 
 from __future__ import annotations
 
+import torch
 from tensordict import TensorDictBase
 from torchrl.modules import set_recurrent_mode
 from torchrl.objectives import TD3Loss, ValueEstimators
@@ -46,6 +52,9 @@ class TD3(Update):
             tau=algo.tau,
         )
         self.bc_weight = algo.bc_weight
+        self.pessimism = algo.get("pessimism")
+        if self.pessimism is not None and self.pessimism < 0:
+            raise ValueError(f"algo.pessimism={self.pessimism} must be >= 0 or null")
         self.policy_delay = algo.policy_delay
         self.recurrent = recurrent
         self.updates = 0
@@ -60,7 +69,11 @@ class TD3(Update):
             loss_critic, info = self.loss.value_loss(batch)
             total = loss_critic
             if step_actor:
-                loss_actor, _ = self.loss.actor_loss(batch)
+                loss_actor = (
+                    self.loss.actor_loss(batch)[0]
+                    if self.pessimism is None
+                    else -self.ensemble_objective(batch).mean()
+                )
                 losses["loss_actor"] = float(loss_actor.detach())
                 total = add_cloning_term(
                     total + loss_actor, self.loss.actor_network, batch, self.bc_weight, losses
@@ -71,6 +84,21 @@ class TD3(Update):
             "q_value": float(info["pred_value"].detach().mean()),
             **losses,
         }
+
+    def ensemble_objective(self, batch: TensorDictBase) -> torch.Tensor:
+        """``mean_k Q_k - pessimism · std_k Q_k`` at the actor's actions on ``batch``, with
+        gradients to the actor only."""
+        loss = self.loss
+        acted = batch.select(*loss.actor_network.in_keys, strict=False)
+        with loss.actor_network_params.to_module(loss.actor_network):
+            acted = loss.actor_network(acted)
+        acted = acted.select(*loss.qvalue_network.in_keys)
+        values = []
+        for params in loss.qvalue_network_params.detach().unbind(0):
+            with params.to_module(loss.qvalue_network):
+                values.append(loss.qvalue_network(acted.clone(False))["state_action_value"])
+        values = torch.stack(values).squeeze(-1)
+        return values.mean(0) - self.pessimism * values.std(0)
 
     def state_dict(self) -> dict:
         return {**super().state_dict(), "updates": self.updates}
