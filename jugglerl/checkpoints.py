@@ -10,11 +10,12 @@ from: an override of ``algo.loss`` then reaches the stage whose loss is ``${algo
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import torch
 from omegaconf import DictConfig, OmegaConf
+
+from jugglerl.run_files import write_atomically
 
 CHECKPOINT = "checkpoint.pt"
 
@@ -28,10 +29,9 @@ def config_entries(cfg: DictConfig) -> dict:
 
 
 def save_checkpoint(state: dict, path: Path) -> None:
-    """Write ``state`` atomically: a crash mid-write leaves the previous checkpoint intact."""
-    partial = path.with_suffix(".partial")
-    torch.save(state, partial)
-    os.replace(partial, path)
+    """Write ``state`` atomically: a crash or a full disk mid-write leaves the previous checkpoint
+    intact (``RunFileError`` otherwise, ``jugglerl.run_files``)."""
+    write_atomically(path, lambda file: torch.save(state, file))
 
 
 def load_checkpoint(path: str | Path) -> dict:

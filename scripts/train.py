@@ -27,6 +27,7 @@ from omegaconf import DictConfig
 
 from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config_types import check_override_types
+from jugglerl.run_files import RunFileError
 from jugglerl.training import resume_state, train
 
 
@@ -40,7 +41,7 @@ def main(cfg: DictConfig) -> None:
             overrides = list(HydraConfig.get().overrides.task)
             cfg, run_dir, state = resume_state(cfg.resume, cfg, overrides)
         train(cfg, run_dir, state)
-    except ValueError as error:
+    except (ValueError, RunFileError) as error:
         sys.exit(f"error: {error}")
 
 

@@ -18,7 +18,6 @@ time the best improves its episode is replayed in the env and recorded under ``b
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ from jugglerl.recording.blueprint import SEARCH_CURVES, training_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
+from jugglerl.run_files import write_json
 
 METRICS = "metrics.json"
 #: Throw counts whose first roll-out is reported: the paper's DPS best, and this project's bar.
@@ -104,7 +104,7 @@ class SearchTraining:
                 bar.set_postfix(best=self.best.throws, mean=f"{batch['return'].mean():.1f}")
                 bar.update()
         metrics = self.final_metrics()
-        (self.run_dir / METRICS).write_text(json.dumps(metrics, indent=2) + "\n")
+        write_json(self.run_dir / METRICS, metrics)
         return metrics
 
     def _learn(self, batch) -> bool:

@@ -22,7 +22,6 @@ go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the 
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -60,6 +59,7 @@ from jugglerl.policies.loading import load_policy
 from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
+from jugglerl.run_files import write_json
 
 METRICS = "metrics.json"
 #: The history entries the progress bar shows.
@@ -157,7 +157,7 @@ class OffPolicyTraining:
             "evaluations": self.evaluations.records,
             "history": self.history,
         }
-        (self.run_dir / METRICS).write_text(json.dumps(metrics, indent=2) + "\n")
+        write_json(self.run_dir / METRICS, metrics)
         return metrics
 
     def _train(self, logger: RerunLogger, bar: tqdm) -> None:

@@ -14,6 +14,7 @@ from pathlib import Path
 import yaml
 
 from jugglerl.commands import CommandError
+from jugglerl.run_files import write_atomically
 
 SHIPPED_PACKAGE = "jugglerl_envs.assets"
 SHIPPED_FOLDER = "policies"
@@ -56,10 +57,12 @@ def read_policy_file(name_or_path: str | Path) -> tuple[dict, str]:
 
 
 def write_policy_file(data: dict, path: str | Path) -> Path:
-    """Write a policy mapping as YAML (JSON for a ``.json`` path), keys in the given order."""
+    """Write a policy mapping as YAML (JSON for a ``.json`` path), keys in the given order,
+    atomically (``jugglerl.run_files``: a run's best policy so far is never half written)."""
     path = Path(path)
     if path.suffix.lower() == ".json":
-        path.write_text(json.dumps(data, indent=2))
+        text = json.dumps(data, indent=2)
     else:
-        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        text = yaml.safe_dump(data, sort_keys=False)
+    write_atomically(path, lambda file: file.write(text.encode()))
     return path

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 import uuid
 import weakref
@@ -17,8 +18,13 @@ from omegaconf import DictConfig, OmegaConf
 from torchrl.record.loggers import Logger
 
 from jugglerl.recording.names import HPARAMS, STEP
+from jugglerl.run_files import RunFileError, failure
 
 APP_ID = "jugglerl"
+#: The longest a flush waits for the recording's file writer, in seconds.
+FLUSH_TIMEOUT = 30.0
+#: The longest the close of a failed recording may take, in seconds.
+CLOSE_TIMEOUT = 5.0
 
 
 class RerunLogger(Logger):
@@ -160,25 +166,47 @@ class RerunLogger(Logger):
 
     # --- life cycle -----------------------------------------------------------------------
     def flush(self, timeout: float | None = None) -> None:
-        """Send buffered scalars and push everything to the sinks."""
+        """Send buffered scalars and push everything to the sinks, waiting at most ``timeout``
+        seconds (``FLUSH_TIMEOUT`` if ``None``). A file that cannot be written (a full disk)
+        closes the recording and raises ``RunFileError`` naming it: rerun's writer stops at
+        the first failed write, and an unbounded flush then waited forever."""
         if self._service_shutdown:
             return
         self._send_scalars()
-        self.experiment.flush()
+        try:
+            self.experiment.flush(timeout_sec=FLUSH_TIMEOUT if timeout is None else timeout)
+        except RuntimeError as error:  # "File-writer thread shut down prematurely"
+            self._abandon()
+            raise failure(self.path, "write the recording", error) from None
+
+    def _abandon(self) -> None:
+        """Give up a recording whose writer died: rerun's ``disconnect`` then sometimes waits
+        forever, so it runs in a daemon thread given ``CLOSE_TIMEOUT`` seconds; if it is still
+        waiting, so would rerun's own close at interpreter exit, which is then skipped."""
+        self._service_shutdown = True
+        closing = threading.Thread(target=self._close_at_exit, daemon=True)
+        closing.start()
+        closing.join(CLOSE_TIMEOUT)
+        if closing.is_alive():
+            rr.unregister_shutdown()
 
     def shutdown(self, timeout: float | None = None) -> None:
         """Flush, then close the file (writes its footer). Safe to call more than once."""
         if self._service_shutdown:
             return
-        self.flush()
+        self.flush(timeout)
         self._close_at_exit()
         self._service_shutdown = True
 
     def __enter__(self) -> RerunLogger:
         return self
 
-    def __exit__(self, *exc_info) -> None:
-        self.shutdown()
+    def __exit__(self, exc_type, *exc_info) -> None:
+        try:
+            self.shutdown()
+        except RunFileError:
+            if exc_type is None:  # else the error already raised is the one to report
+                raise
 
     def _checkpoint_state(self) -> dict[str, Any]:
         return {"recording_id": self.recording_id, "last_step": self._last_step}
