@@ -50,6 +50,20 @@ def test_a_corrected_actor_starts_exactly_at_its_base():
     assert torch.equal(ours[BASE_ACTION], theirs["action"])
 
 
+def test_a_correction_leaves_the_runs_random_stream_and_base_weights_as_without_it():
+    """So the cloning stages of a run with a correction repeat those of a run without."""
+    draws = []
+    for overrides in (CORRECTED, ["actor=lstm", "~actor.correction"]):
+        cfg = train_config(*overrides)
+        torch.manual_seed(0)
+        actor = build_actor(cfg.actor, state_size(cfg.state), 3)
+        draws.append((actor.state_dict(), torch.rand(4)))
+    (corrected, after_corrected), (plain, after_plain) = draws
+    assert torch.equal(after_corrected, after_plain)
+    for key, value in plain.items():
+        assert torch.equal(corrected[key], value), key
+
+
 def test_the_correction_stays_within_its_bound_and_reaches_it():
     cfg = train_config(*CORRECTED)
     actor = build_actor(cfg.actor, state_size(cfg.state), 3)

@@ -54,13 +54,15 @@ def corrected(
     features: dict[str, int],
 ) -> TensorDictSequential:
     """``base`` followed by a ``Correction`` reading ``state``, its ``action`` and ``features``
-    (``{key: size}``)."""
-    correction = Correction(
-        state_size + action_size + sum(features.values()),
-        action_size,
-        correction_cfg.hidden,
-        correction_cfg.max_correction,
-    )
+    (``{key: size}``). Its weights are drawn from a fork of torch's random stream, so that a
+    run's other draws (exploration, sampling) are the same with or without a correction."""
+    with torch.random.fork_rng():
+        correction = Correction(
+            state_size + action_size + sum(features.values()),
+            action_size,
+            correction_cfg.hidden,
+            correction_cfg.max_correction,
+        )
     module = TensorModule(
         correction, ["state", "action", *features], ["action", BASE_ACTION]
     )
