@@ -176,6 +176,7 @@ def test_ctrl_c_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
         ("exploration=epsilon", "Could not find 'exploration/epsilon'"),
         ("reward=height", "Could not find 'reward/height'"),
         ("collector.num_envs=3", "error: collector.frames_per_batch=128 must be a multiple of"),
+        ("collector.num_envs=0", "error: collector.num_envs=0 must be >= 1"),
         ("exploration.centre=middle", "error: exploration.centre=middle is not one of timed"),
         ("algo=td3 algo.policy_delay=0", "error: algo.policy_delay=0 must be >= 1"),
         ("algo.loss=sac", "error: algo.loss='sac' is not available; choose one of bc, ddpg, td3"),

@@ -13,6 +13,8 @@ from jugglerl.offpolicy.observation_parts import observed_parts
 def check_config(cfg: DictConfig) -> None:
     """Raise ``ValueError`` naming the keys of a budget, buffer or evaluation that cannot work."""
     collect = cfg.collector
+    if collect.num_envs < 1:
+        raise ValueError(f"collector.num_envs={collect.num_envs} must be >= 1")
     if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:
         raise ValueError(
             f"collector.frames_per_batch={collect.frames_per_batch} must be a multiple of"
