@@ -26,7 +26,9 @@ from tqdm import tqdm
 
 from jugglerl import robustness
 from jugglerl.cluster import register_sweep_launcher
+from jugglerl.config import make_juggle_env
 from jugglerl.config_types import check_override_types
+from jugglerl.policies.loading import load_policy
 from jugglerl.recording.logger import RerunLogger
 
 ROOT = "robustness"
@@ -52,6 +54,9 @@ def main(cfg: DictConfig) -> None:
     try:
         check_override_types()
         families = robustness.families_from_config(cfg.families, cfg.env, cfg.select)
+        with make_juggle_env(cfg.env) as template:  # a policy that cannot load names itself
+            for policy in policies:
+                load_policy(policy, template)
         if cfg.reference not in policies:
             raise ValueError(f"reference={cfg.reference} must be one of policies={policies}")
         episodes = len(policies) * len(robustness.conditions(families)) * cfg.seeds

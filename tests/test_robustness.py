@@ -130,3 +130,10 @@ def test_the_script_names_an_unknown_policy(tmp_path):
     )
     assert result.returncode == 1
     assert "juggler9000" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_a_policy_that_cannot_load_is_named_before_the_reference(tmp_path):
+    result = run_script("robustness.py", "policies=[nope]", f"hydra.run.dir={tmp_path}")
+    assert result.returncode == 1
+    assert result.stderr.startswith("error: ") and "nope" in result.stderr
+    assert "reference" not in result.stderr and "Traceback" not in result.stderr
