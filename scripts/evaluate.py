@@ -24,6 +24,7 @@ from jugglerl.recording.blueprint import episode_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import SUMMARY
+from jugglerl.run_files import write_json
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="evaluate")
@@ -49,7 +50,7 @@ def main(cfg: DictConfig) -> None:
             sys.exit(f"interrupted: the episode so far is in {logger.path}")
         logger.log_table(SUMMARY, metrics.scalars())
 
-    (run_dir / "metrics.json").write_text(json.dumps(metrics.to_dict(), indent=2) + "\n")
+    write_json(run_dir / "metrics.json", metrics.to_dict())
     print(json.dumps(metrics.to_dict(), indent=2))
     print(
         f"policy {cfg.policy}: {metrics.throws} throws in {metrics.duration:g} s"

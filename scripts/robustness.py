@@ -14,7 +14,6 @@ time up), ``robustness.png`` (mean throws against magnitude, one line per policy
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -30,6 +29,7 @@ from jugglerl.config import make_juggle_env
 from jugglerl.config_types import check_override_types
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.logger import RerunLogger
+from jugglerl.run_files import write_json
 
 ROOT = "robustness"
 
@@ -88,7 +88,7 @@ def main(cfg: DictConfig) -> None:
         "breaking_points": points,
         "episodes": records,
     }
-    (run_dir / "robustness.json").write_text(json.dumps(results, indent=2) + "\n")
+    write_json(run_dir / "robustness.json", results)
     plot_path = robustness.plot(rows, families, run_dir / "robustness.png")
     with RerunLogger.from_config(cfg.logger, run_dir) as logger:
         logger.log_hparams(cfg)

@@ -14,7 +14,7 @@ from pathlib import Path
 import yaml
 
 from jugglerl.commands import CommandError
-from jugglerl.policies.files import read_policy_file
+from jugglerl.policies.files import names_a_run, read_policy_file
 
 #: The parts of a run's config an actor policy needs (``ActorPolicy.from_config``).
 CONFIG_KEYS = ("actor", "state", "env")
@@ -50,11 +50,10 @@ def actor_policy_from_dict(data: dict, source: str):
 def read_actor_weights(spec: str) -> dict:
     """``config``, deployed ``policy`` weights and ``normalisation`` of a shipped actor name, a
     ``kind: actor`` file or an off-policy run (its directory or ``checkpoint.pt``)."""
-    path = Path(spec)
-    if path.suffix == ".pt" or path.is_dir():
+    if names_a_run(spec):
         from jugglerl.checkpoints import load_checkpoint
 
-        state = load_checkpoint(path)
+        state = load_checkpoint(spec)
         if state["deploys"] != "actor":
             raise CommandError(f"{spec}: the run deploys {state['deploys']}, not an actor")
         return state

@@ -43,6 +43,13 @@ def policy_file(name_or_path: str | Path) -> Path:
     return path
 
 
+def names_a_run(spec: str | Path) -> bool:
+    """Whether a ``policy=``/``init_actor=`` argument names a training run (its directory or a
+    ``.pt`` checkpoint) rather than a policy name or file."""
+    path = Path(spec)
+    return path.suffix == ".pt" or path.is_dir()
+
+
 def read_policy_file(name_or_path: str | Path) -> tuple[dict, str]:
     """The mapping in a policy file (YAML or JSON) and its path as a string, for messages."""
     path = policy_file(name_or_path)

@@ -11,11 +11,9 @@ from jugglerl.policies import Policy
 from jugglerl.policies.actor_file import actor_policy_from_dict
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
-from jugglerl.policies.files import read_policy_file
+from jugglerl.policies.files import names_a_run, read_policy_file
 from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
 
-#: File names that mark a training checkpoint rather than a policy file.
-CHECKPOINT_SUFFIX = ".pt"
 #: Policy file kinds and their readers (``data, source, env -> Policy``).
 FILE_KINDS = {
     "command": lambda data, source, env: CommandPolicy(command_from_dict(data, source)),
@@ -33,9 +31,8 @@ def load_policy(spec: str, env: gym.Env) -> Policy:
 
     Raises ``ValueError`` with a one-line reason when ``spec`` is unusable.
     """
-    path = Path(spec)
-    if path.suffix == CHECKPOINT_SUFFIX or path.is_dir():
-        return _run_policy(path, env)
+    if names_a_run(spec):
+        return _run_policy(Path(spec), env)
     data, source = read_policy_file(spec)
     kind = data.get("kind", "command")
     if kind not in FILE_KINDS:
