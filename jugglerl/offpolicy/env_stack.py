@@ -101,22 +101,15 @@ def make_vector_env(
     if num_envs < 1:
         raise ValueError(f"collector.num_envs={num_envs} must be >= 1")
     kwargs = OmegaConf.to_container(env_cfg, resolve=True)
-    autoreset = {"autoreset_mode": gym.vector.AutoresetMode.DISABLED}
+    variants = variants or [{}]
+    makers = [
+        partial(_numeric_env, {**kwargs, **variants[index % len(variants)]})
+        for index in range(num_envs)
+    ]
     try:
-        if not variants:
-            return gym.make_vec(
-                ENV_ID,
-                num_envs=num_envs,
-                vectorization_mode="sync",
-                vector_kwargs=autoreset,
-                wrappers=[NumericInfo],
-                **kwargs,
-            )
-        makers = [
-            partial(_numeric_env, {**kwargs, **variants[index % len(variants)]})
-            for index in range(num_envs)
-        ]
-        return gym.vector.SyncVectorEnv(makers, **autoreset)
+        return gym.vector.SyncVectorEnv(
+            makers, autoreset_mode=gym.vector.AutoresetMode.DISABLED
+        )
     except TypeError as error:  # an unknown key in the env group
         raise ValueError(f"env config: {error}") from None
 
