@@ -5,6 +5,7 @@ python scripts/evaluate.py policy=outputs/train/ddpg/<run>  # what a training ru
 python scripts/evaluate.py policy=path/to/command.yaml env=earth seed=3 duration=60
 python scripts/evaluate.py policy=expert hydra.run.dir=outputs/my_eval
 rerun outputs/my_eval/episode.rrd      # watch it: 3D scene, ball height, throws
+python scripts/evaluate.py policy=closed_loop video=true   # also episode.mp4, rendered headless
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from jugglerl.recording.blueprint import episode_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import SUMMARY
+from jugglerl.recording.video import VideoRecorder, render_options
 from jugglerl.run_files import write_json
 
 
@@ -34,6 +36,8 @@ def main(cfg: DictConfig) -> None:
         check_override_types()
         env = make_juggle_env(cfg.env, duration=cfg.duration)
         policy = load_policy(str(cfg.policy), env)
+        if cfg.video:
+            env = VideoRecorder(env, run_dir / str(cfg.render.file), **render_options(cfg.render))
     except ValueError as error:
         sys.exit(f"error: {error}")
 
@@ -52,9 +56,10 @@ def main(cfg: DictConfig) -> None:
 
     write_json(run_dir / "metrics.json", metrics.to_dict())
     print(json.dumps(metrics.to_dict(), indent=2))
+    video = f", {env.path} ({env.frames} frames)" if cfg.video else ""
     print(
         f"policy {cfg.policy}: {metrics.throws} throws in {metrics.duration:g} s"
-        f" -> {run_dir / 'metrics.json'}, {logger.path}"
+        f" -> {run_dir / 'metrics.json'}, {logger.path}{video}"
     )
 
 

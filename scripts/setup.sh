@@ -27,3 +27,5 @@ EXTRAS=${EXTRAS:-test}
 step "installing jugglerl (editable) with [$EXTRAS]" \
     .venv/bin/python -m pip install --quiet -e ".[$EXTRAS]"
 echo "setup: done: .venv/bin/python ($(.venv/bin/python --version 2>&1))"
+.venv/bin/python -c 'import ctypes.util, sys; sys.exit(ctypes.util.find_library("EGL") is None)' ||
+    echo "setup: note: no libEGL here; evaluate.py video=true needs it (apt-get install libegl1 libgl1-mesa-dri)"

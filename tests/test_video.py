@@ -1,0 +1,89 @@
+"""Videos of episodes: ``evaluate.py video=true`` and ``VideoRecorder``."""
+
+import json
+
+import av
+import mujoco
+import numpy as np
+import pytest
+from cli import run_script
+from PIL import Image
+
+from jugglerl.evaluation import run_episode
+from jugglerl.policies.loading import load_policy
+from jugglerl.recording.video import VideoError, VideoRecorder
+from jugglerl_envs import JuggleEnv
+
+
+def renderer_or_skip():
+    try:
+        mujoco.Renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 16, 16).close()
+    except Exception as error:  # CI installs EGL (.ci/run); elsewhere it may be missing
+        pytest.skip(f"no OpenGL for MuJoCo's offscreen renderer: {error}")
+
+
+def decoded_frames(path) -> list[np.ndarray]:
+    with av.open(str(path)) as container:
+        return [frame.to_ndarray(format="rgb24") for frame in container.decode(video=0)]
+
+
+def test_evaluate_writes_a_playable_real_time_mp4_and_the_same_episode(tmp_path):
+    renderer_or_skip()
+    plain, filmed = tmp_path / "plain", tmp_path / "filmed"
+    common = ("policy=closed_loop", "duration=3", "render.fps=20")
+    assert run_script("evaluate.py", *common, f"hydra.run.dir={plain}").returncode == 0
+    result = run_script("evaluate.py", *common, "video=true", f"hydra.run.dir={filmed}")
+    assert result.returncode == 0, result.stderr
+    assert "episode.mp4 (61 frames)" in result.stdout
+
+    frames = decoded_frames(filmed / "episode.mp4")
+    assert len(frames) == 61  # t = 0, 0.05, ..., 3.0 s: real time at 20 frames per second
+    assert frames[0].shape == (480, 640, 3)
+    assert all(frame.std() > 10 for frame in frames)  # the scene, not a blank buffer
+    assert np.abs(frames[-1].astype(int) - frames[0]).mean() > 1  # the arm moved
+    with av.open(str(filmed / "episode.mp4")) as container:
+        assert container.streams.video[0].codec_context.name == "h264"
+        assert float(container.streams.video[0].average_rate) == 20
+
+    metrics = [json.loads((run / "metrics.json").read_text()) for run in (plain, filmed)]
+    assert metrics[0] == metrics[1]  # filming does not change the episode
+
+
+def test_a_webp_loops_and_has_a_frame_per_period(tmp_path):
+    renderer_or_skip()
+    env = JuggleEnv(duration=1.0)
+    recorder = VideoRecorder(env, tmp_path / "clip.webp", fps=10, width=160, height=120)
+    run_episode(recorder, load_policy("closed_loop", env), seed=0)
+    recorder.close()
+    with Image.open(tmp_path / "clip.webp") as image:
+        assert image.n_frames == recorder.frames == 11
+        assert image.info["loop"] == 0 and image.size == (160, 120)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"path": "clip.avi"}, "the suffix must be one of .mp4, .webp, .gif"),
+        ({"width": 641}, "video size must be even and positive, got 641 x 480"),
+        ({"fps": 60}, "video fps must be in (0, 50]"),
+        ({"camera": "top"}, "video camera 'top' is not in the scene"),
+    ],
+)
+def test_bad_video_options_are_one_line(tmp_path, options, message):
+    arguments = {"path": tmp_path / "clip.mp4", **options}
+    with pytest.raises(VideoError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        VideoRecorder(JuggleEnv(), **arguments)
+
+
+def test_no_opengl_is_one_line_naming_the_backend_and_the_packages(tmp_path, monkeypatch):
+    def no_gl(*args, **kwargs):
+        raise RuntimeError("The MUJOCO_GL environment variable is set to egl\nbut EGL failed")
+
+    monkeypatch.setattr(mujoco, "Renderer", no_gl)
+    monkeypatch.setenv("MUJOCO_GL", "egl")
+    with pytest.raises(VideoError) as error:
+        VideoRecorder(JuggleEnv(), tmp_path / "clip.mp4")
+    assert "\n" not in str(error.value)
+    assert str(error.value).startswith("video needs OpenGL for MuJoCo's offscreen renderer")
+    assert "MUJOCO_GL=egl" in str(error.value) and "apt-get install libegl1" in str(error.value)
+    assert not (tmp_path / "clip.mp4").exists()
