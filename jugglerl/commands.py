@@ -13,7 +13,7 @@ cycle. The ball is dropped into the cup at the start; without a lead-in the firs
 soon as the cycle says, before the dropped ball has settled, and an off-centre drop then often
 loses it in the first throws even where the cycle itself is stable.
 
-File format (a policy file of ``kind: command``, YAML or JSON; ``jugglerl.policies.command``)::
+File format (a policy file of ``kind: command``, YAML or JSON: ``load_command``, ``save_command``)::
 
     kind: command
     name: expert
@@ -33,11 +33,13 @@ from pathlib import Path
 
 import numpy as np
 
+from jugglerl.policy_files import PolicyFileError, read_policy_file, write_policy_file
+
 KIND = "command"
 KEYS = ("kind", "name", "cycle", "pan", "lead_in", "via_points")
 
 
-class CommandError(ValueError):
+class CommandError(PolicyFileError):
     """A command file or value that cannot be used; the message says what and where."""
 
 
@@ -153,3 +155,17 @@ def command_from_dict(data: dict, source: str = "command") -> ViaPointCommand:
         return ViaPointCommand(cycle, points, pan, lead_in, name=name)
     except CommandError as error:
         raise CommandError(f"{source}: {error}") from None
+
+
+def load_command(name_or_path: str | Path) -> ViaPointCommand:
+    """A command by shipped name (``expert``) or from a ``.yaml``/``.yml``/``.json`` file (a
+    policy file of ``kind: command``; the kind may be left out)."""
+    data, source = read_policy_file(name_or_path)
+    if data.get("kind", KIND) != KIND:
+        raise CommandError(f"{source}: kind={data.get('kind')!r} is not a command (kind: {KIND})")
+    return command_from_dict(data, source)
+
+
+def save_command(command: ViaPointCommand, path: str | Path) -> Path:
+    """Write ``command`` as a policy file (YAML, or JSON for a ``.json`` path)."""
+    return write_policy_file(command.to_dict(), path)

@@ -5,10 +5,10 @@
 
 Columns: seeds, best throws (median and per seed), roll-outs to the first θ with >= 39 and >= 60
 throws (median over the seeds that got there, and how many did), and the best θ's mean fraction
-of its throws kept with start noise (the run's ``noise_check``). See ``jugglerl.run_tables``.
+of its throws kept with start noise (the run's ``noise_check``); ``jugglerl.reports.run_tables``.
 """
 
-from jugglerl.run_tables import search_table, table_main
+from jugglerl.reports.run_tables import search_table, table_main
 
 if __name__ == "__main__":
     table_main(__doc__, search_table, "search")

@@ -6,10 +6,10 @@
 Reports each run's final evaluation (``eval.seeds`` deterministic episodes of ``env.duration``
 from the standard start): catch rate (the ball caught and kept up for ``eval.catch_time``), mean
 throws, mean time the ball stayed up, and the run's frames and wall time; runs of the same
-algorithm, reward and actor (seeds) are averaged. See ``jugglerl.run_tables``.
+algorithm, reward and actor (seeds) are averaged. See ``jugglerl.reports.run_tables``.
 """
 
-from jugglerl.run_tables import offpolicy_table, table_main
+from jugglerl.reports.run_tables import offpolicy_table, table_main
 
 if __name__ == "__main__":
     table_main(__doc__, offpolicy_table, "off-policy")

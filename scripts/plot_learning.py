@@ -8,7 +8,7 @@ and draws mean throws and mean time up against frames, one line per run labelled
 with the stage boundaries of ``algo.stages`` dashed; for runs evaluated under ``eval.perturbed``
 conditions a third panel draws the throws ``eval.keep_best`` ranks (nominal and perturbed). A
 folder may hold several runs (a multirun): every ``metrics.json`` below it is read
-(``jugglerl.run_tables.run_metrics``). Prints where it wrote the PNG.
+(``jugglerl.reports.run_tables.run_metrics``). Prints where it wrote the PNG.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from itertools import pairwise
 from pathlib import Path
 
 from jugglerl.offpolicy.evaluation import score
-from jugglerl.run_tables import METRICS, run_metrics
+from jugglerl.reports.run_tables import METRICS, run_metrics
 
 
 def read_runs(folder: Path) -> list[dict]:

@@ -23,12 +23,12 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
-from jugglerl import robustness
 from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config import make_juggle_env
 from jugglerl.config_types import check_override_types
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.logger import RerunLogger
+from jugglerl.reports import robustness
 from jugglerl.run_files import write_json
 
 ROOT = "robustness"

@@ -17,7 +17,7 @@ import yaml
 
 from jugglerl.checkpoints import load_checkpoint
 from jugglerl.policies.actor_file import write_actor_policy
-from jugglerl.policies.files import shipped_folder
+from jugglerl.policy_files import shipped_folder
 
 
 def header(run: Path, state: dict) -> str:

@@ -1,6 +1,6 @@
 """Train a juggling policy; everything lands in the run directory.
 
-python scripts/train.py                                       # BC, DAgger, DDPG from closed_loop
+python scripts/train.py                                       # BC, then DAgger, from closed_loop
 python scripts/train.py actor=lstm                            # the same with the LSTM actor
 python scripts/train.py algo=ddpg actor=lstm reward=contacts  # DDPG alone, the paper's reward 3
 python scripts/train.py algo=td3 actor=lstm                   # TD3 (twin critics, delayed actor)

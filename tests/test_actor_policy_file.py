@@ -12,11 +12,11 @@ from omegaconf import OmegaConf
 import jugglerl.policies.feedback as feedback
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode
-from jugglerl.offpolicy.actors import build_actor
-from jugglerl.offpolicy.env_stack import ACTION_SIZE, state_size
+from jugglerl.networks.actors import ACTION_SIZE, build_actor
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.actor_file import write_actor_policy
 from jugglerl.policies.loading import load_policy
+from jugglerl.state.transforms import state_size
 
 
 def test_lstm_juggler_juggles_by_name_with_no_feedback_policy_built(monkeypatch):

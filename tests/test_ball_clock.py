@@ -1,4 +1,4 @@
-"""The ball clock (``jugglerl.offpolicy.ball_clock``): the teacher's phase, made observable."""
+"""The ball clock (``jugglerl.state.ball_clock``): the teacher's phase, made observable."""
 
 from dataclasses import replace
 
@@ -8,11 +8,12 @@ from cli import train_config
 from tensordict import TensorDict
 from torchrl.envs.utils import check_env_specs
 
-from jugglerl.offpolicy.actors import build_actor
-from jugglerl.offpolicy.ball_clock import LOCK, BallClock
-from jugglerl.offpolicy.env_stack import make_env, state_size
-from jugglerl.offpolicy.timestamp import phase_features
+from jugglerl.networks.actors import build_actor
+from jugglerl.offpolicy.env_stack import make_env
 from jugglerl.policies.loading import load_policy
+from jugglerl.state.ball_clock import LOCK, BallClock
+from jugglerl.state.timestamp import phase_features
+from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv
 
 

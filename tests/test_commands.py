@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from jugglerl.commands import CommandError, ViaPointCommand
+from jugglerl.commands import CommandError, ViaPointCommand, load_command, save_command
 from jugglerl.evaluation import run_episode
-from jugglerl.policies.command import CommandPolicy, load_command, save_command
+from jugglerl.policies.command import CommandPolicy
+from jugglerl.policy_files import PolicyFileError
 from jugglerl_envs import JuggleEnv
 
 
@@ -56,17 +57,17 @@ def test_save_and_load_round_trip(tmp_path):
 def test_malformed_command_file_gives_a_clear_error(tmp_path, content, message):
     path = tmp_path / "bad.yaml"
     path.write_text(content)
-    with pytest.raises(CommandError) as error:
+    with pytest.raises(PolicyFileError) as error:
         load_command(path)
     assert message in str(error.value) and str(path) in str(error.value)
 
 
 def test_missing_command_names_the_path_and_the_shipped_ones(tmp_path):
-    with pytest.raises(CommandError, match="no policy file at .*shipped policies: closed_loop,"):
+    with pytest.raises(PolicyFileError, match="no policy file at .*shipped policies: closed_loop,"):
         load_command("no_such_command")
     with pytest.raises(CommandError, match="kind='feedback' is not a command"):
         load_command("closed_loop")
-    with pytest.raises(CommandError, match="not valid JSON"):
+    with pytest.raises(PolicyFileError, match="not valid JSON"):
         (tmp_path / "c.json").write_text("{")
         load_command(tmp_path / "c.json")
 

@@ -7,12 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jugglerl.commands import ViaPointCommand
+from jugglerl.commands import ViaPointCommand, load_command
 from jugglerl.dps.distribution import sample_commands
 from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.evaluation import run_episode
-from jugglerl.policies.command import CommandPolicy, load_command
+from jugglerl.policies.command import CommandPolicy
 from jugglerl_envs import JuggleEnv
 
 
@@ -64,7 +64,7 @@ def test_one_seed_per_command():
 
 
 def test_bench_dps_prints_the_ratio_last():
-    script = Path(__file__).resolve().parents[1] / "scripts" / "bench_dps.py"
+    script = Path(__file__).resolve().parents[1] / "scripts" / "benchmarks" / "bench_dps.py"
     result = subprocess.run(
         [sys.executable, str(script), "--commands", "2", "--duration", "1", "--repeats", "1"],
         capture_output=True,
@@ -77,7 +77,7 @@ def test_bench_dps_prints_the_ratio_last():
 
 
 def test_hold_sweep_prints_a_row_per_cut():
-    script = Path(__file__).resolve().parents[1] / "scripts" / "hold_sweep.py"
+    script = Path(__file__).resolve().parents[1] / "scripts" / "studies" / "hold_sweep.py"
     arguments = ["--duration", "6", "--seeds", "2", "--cuts", "0,0.3", "--lead-in", "0.5"]
     result = subprocess.run(
         [sys.executable, str(script), *arguments], capture_output=True, text=True, timeout=120

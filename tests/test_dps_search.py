@@ -6,6 +6,7 @@ import pytest
 import torch
 from omegaconf import OmegaConf
 
+from jugglerl.commands import load_command
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.params import (
     ViaPointConstraints,
@@ -19,7 +20,6 @@ from jugglerl.dps.updates.elite import Elite
 from jugglerl.dps.updates.ereps import EpisodicREPS, ereps_weights
 from jugglerl.dps.updates.greedy import Greedy
 from jugglerl.dps.updates.weighted import RewardWeighted
-from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
 CONSTRAINTS = ViaPointConstraints(

@@ -1,20 +1,16 @@
-"""scripts/earth_throw.py: a throw over the threshold at real gravity within the speed limit."""
+"""scripts/studies/earth_throw.py: a throw over the threshold at real gravity within the speed
+limit."""
 
-import importlib.util
 import math
-import sys
 
 import numpy as np
 import pytest
-from cli import ROOT, run_script
+from cli import run_script
 
-spec = importlib.util.spec_from_file_location("earth_throw", ROOT / "scripts" / "earth_throw.py")
-earth_throw = importlib.util.module_from_spec(spec)
-sys.modules["earth_throw"] = earth_throw  # its dataclass looks its module up there
-spec.loader.exec_module(earth_throw)
+from jugglerl.studies import earth_throw
 
-#: The best throw of ``python scripts/earth_throw.py`` (defaults, seed 1), as it prints it: a
-#: wind-up raising the upper arm, then lift and elbow swinging up together (README, env=earth).
+#: The best throw of ``python scripts/studies/earth_throw.py`` (defaults, seed 1), as it prints
+#: it: a wind-up raising the upper arm, then lift and elbow swinging up together (env=earth).
 FOUND = np.array([-1.507, 1.675, 0.187,  # start lift, elbow, tilt; then knots (s, lift, elbow)
                   0.58, -0.640, 1.640, 0.246, -1.516, 0.649, 0.29, 0.0, 2.696])
 
@@ -36,13 +32,13 @@ def test_the_experts_elbow_flick_does_not_leave_the_cup_at_earth():
 
 
 def test_a_short_search_prints_its_throw_and_bad_budgets_are_one_error_line():
-    result = run_script("earth_throw.py", "--restarts", "1", "--generations", "2")
+    result = run_script("studies/earth_throw.py", "--restarts", "1", "--generations", "2")
     assert result.returncode == 0, result.stderr[-2000:]
     last = result.stdout.strip().splitlines()[-1]
     assert last.startswith("apex ") and "peak joint speeds" in last
-    bad = run_script("earth_throw.py", "--restarts", "0")
+    bad = run_script("studies/earth_throw.py", "--restarts", "0")
     assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith("must be >= 1")
-    bad = run_script("earth_throw.py", "--landing-weight", "-1")
+    bad = run_script("studies/earth_throw.py", "--landing-weight", "-1")
     assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith("must be >= 0")
 
 

@@ -82,7 +82,8 @@ def test_contacts_reward_counts_ball_arm_contacts(hold):
 
 
 def test_throws_reward_pays_one_per_counted_throw():
-    from jugglerl.policies.command import CommandPolicy, load_command
+    from jugglerl.commands import load_command
+    from jugglerl.policies.command import CommandPolicy
 
     env = JuggleEnv(duration=10.0)
     policy = CommandPolicy(load_command("expert"))

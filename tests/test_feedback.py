@@ -9,12 +9,12 @@ import torch
 import yaml
 from cli import env_preset, run_script, run_train, train_config
 
-from jugglerl.commands import CommandError
+from jugglerl.commands import CommandError, load_command
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
 from jugglerl.dps.spaces.feedback_gains import FeedbackGainSpace
 from jugglerl.evaluation import run_episode
-from jugglerl.policies.command import CommandPolicy, load_command
+from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import (
     LOCK_HEIGHT,
     PARAM_NAMES,
@@ -194,7 +194,7 @@ def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
 
 def test_every_shipped_policy_keeps_its_throws_honest():
     """The cup's throat never rises above 0.76 m, so a counted throw rose 0.24 m in free flight."""
-    from jugglerl.policies.files import read_policy_file, shipped_names
+    from jugglerl.policy_files import read_policy_file, shipped_names
 
     for name in shipped_names():
         env = env_preset(read_policy_file(name)[0].get("env", "paper"))

@@ -1,10 +1,10 @@
-"""scripts/imitation_gap.py: a student's gap to its teacher on the student's own episode."""
+"""scripts/studies/imitation_gap.py: a student's gap to its teacher on the student's own episode."""
 
 from cli import run_script
 
 
 def run(*args: str) -> list[str]:
-    result = run_script("imitation_gap.py", *args)
+    result = run_script("studies/imitation_gap.py", *args)
     assert result.returncode == 0, result.stderr[-2000:]
     return result.stdout.splitlines()
 
@@ -28,6 +28,6 @@ def test_another_policy_shows_a_gap_on_every_actuator():
 
 
 def test_a_bad_policy_is_one_error_line():
-    result = run_script("imitation_gap.py", "no_such_policy")
+    result = run_script("studies/imitation_gap.py", "no_such_policy")
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1].startswith("error: no policy file")

@@ -12,15 +12,16 @@ from torchrl.data import Bounded
 from torchrl.envs.utils import ExplorationType, check_env_specs, set_exploration_type
 from torchrl.modules import set_recurrent_mode
 
-from jugglerl.offpolicy.actors import build_actor, recurrent_state
+from jugglerl.commands import load_command
+from jugglerl.networks.actors import build_actor, recurrent_state
+from jugglerl.networks.reference import CommandReference
 from jugglerl.offpolicy.buffer import ReplayBuffer
-from jugglerl.offpolicy.env_stack import make_env, normalisation, state_size, state_transforms
+from jugglerl.offpolicy.env_stack import make_env, normalisation
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.exploration.gaussian import CentredGaussianNoise, CommandCentre
-from jugglerl.offpolicy.reference import CommandReference
-from jugglerl.offpolicy.timestamp import TimestampFeatures, time_features
 from jugglerl.policies.actor import ActorPolicy
-from jugglerl.policies.command import load_command
+from jugglerl.state.timestamp import TimestampFeatures, time_features
+from jugglerl.state.transforms import state_size, state_transforms
 from jugglerl_envs import JuggleEnv
 
 SMALL = ["algo=ddpg", "env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from jugglerl.commands import load_command
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 from jugglerl_envs.rewards.juggle import CENTRING_WEIGHT
 

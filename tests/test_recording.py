@@ -14,8 +14,9 @@ import rerun_cli
 from rerun.chunk import RrdReader
 from test_evaluate_script import run_evaluate
 
+from jugglerl.commands import load_command
 from jugglerl.evaluation import run_episode
-from jugglerl.policies.command import CommandPolicy, load_command
+from jugglerl.policies.command import CommandPolicy
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column, entities, timelines

@@ -11,12 +11,12 @@ from tensordict import TensorDict
 from test_losses import transitions
 from test_offpolicy_training import TINY
 
-from jugglerl.offpolicy.actors import build_actor
-from jugglerl.offpolicy.actors.correction import BASE_ACTION, Correction
-from jugglerl.offpolicy.env_stack import state_size
+from jugglerl.networks.actors import build_actor
+from jugglerl.networks.actors.correction import BASE_ACTION, Correction
 from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.policies.actor_file import read_actor_weights
+from jugglerl.state.transforms import state_size
 
 CORRECTED = [
     "actor=lstm",

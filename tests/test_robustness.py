@@ -6,8 +6,8 @@ import pytest
 from cli import ROOT, rrd_verifies, run_script
 from omegaconf import OmegaConf
 
-from jugglerl import robustness
 from jugglerl.recording.reading import column
+from jugglerl.reports import robustness
 
 ENV = OmegaConf.load(ROOT / "configs" / "env" / "paper.yaml")
 FAMILIES = OmegaConf.create(

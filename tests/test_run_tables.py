@@ -1,4 +1,4 @@
-"""The run tables the README reports, rendered from runs' metrics.json files."""
+"""The run tables docs/results/ reports, rendered from runs' metrics.json files."""
 
 import json
 

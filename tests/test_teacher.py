@@ -6,10 +6,11 @@ from cli import train_config
 from tensordict.nn import TensorDictModule, TensorDictSequential
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
-from jugglerl.offpolicy.actors import build_actor
-from jugglerl.offpolicy.env_stack import make_env, state_size
+from jugglerl.networks.actors import build_actor
+from jugglerl.offpolicy.env_stack import make_env
 from jugglerl.offpolicy.teacher import TEACHER_ACTION, TeacherModule
 from jugglerl.policies.loading import load_policy
+from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv
 
 #: 2 envs whose 2 s episodes end and restart inside a 250-step roll-out.

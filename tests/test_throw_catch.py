@@ -14,7 +14,6 @@ from jugglerl.commands import CommandError
 from jugglerl.evaluation import run_episode
 from jugglerl.policies import feedback
 from jugglerl.policies.cup_ik import CupIK
-from jugglerl.policies.files import read_policy_file
 from jugglerl.policies.loading import load_policy
 from jugglerl.policies.throw_catch import (
     ThrowCatch,
@@ -22,6 +21,7 @@ from jugglerl.policies.throw_catch import (
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
+from jugglerl.policy_files import read_policy_file
 from jugglerl_envs import JuggleEnv
 
 

@@ -9,7 +9,7 @@ the items, so a seeded run is the same, to the last bit, wherever it runs:
 | ``local`` (default) | ``workers`` processes of this machine | one item each |
 | ``ray`` (``ray_tasks.py``) | Ray tasks at ``cluster.address`` | ``cluster.chunk`` items each |
 
-Its users: the closed-loop episodes of ``jugglerl.episode_pool`` (the closed-loop searches, the
+Its users: the closed-loop episodes of ``episode_pool`` (the closed-loop searches, the
 robustness benchmark) and, on Ray, the open-loop roll-outs of DPS
 (``jugglerl.dps.cluster_rollouts``); sweeps (``-m``) run on Ray through
 ``jugglerl.cluster.launcher``. Adding a backend: a module here registering a class built as

@@ -19,9 +19,9 @@ import gymnasium as gym
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
+from jugglerl.cluster.episode_pool import EpisodePool, EpisodeTask
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.rollouts import RolloutResults
-from jugglerl.episode_pool import EpisodePool, EpisodeTask
 from jugglerl.evaluation import EpisodeMetrics
 from jugglerl.policies import Policy
 

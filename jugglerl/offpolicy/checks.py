@@ -5,9 +5,9 @@ from __future__ import annotations
 from omegaconf import DictConfig
 
 from jugglerl.config import make_juggle_env
-from jugglerl.offpolicy.actors import recurrent_state
+from jugglerl.networks.actors import recurrent_state
 from jugglerl.offpolicy.evaluation import perturbed_conditions
-from jugglerl.offpolicy.observation_parts import observed_parts
+from jugglerl.state.observation_parts import observed_parts
 
 
 def check_config(cfg: DictConfig) -> None:

@@ -1,6 +1,6 @@
 """``make_env``: the juggling env batched in one process, under TorchRL's transform stack.
 
-TorchRL costs about half a millisecond per env call whatever the batch (toolchain-notes.md), so
+TorchRL costs about half a millisecond per env call whatever the batch size, so
 the envs run as one synchronous Gymnasium vector env behind a single ``GymWrapper``. The stack
 keeps the env's physical ``observation`` (float64) and episode ``time`` (s, float64) as they
 are, for teachers acting in the loop (``jugglerl.offpolicy.teacher``), and builds the networks'
@@ -19,11 +19,8 @@ input ``state`` beside them:
 | ``BallClock`` | appends the phase since the ball last fell past the cup (``state.ball_clock``) |
 | ``TensorDictPrimer`` | the actor's zero recurrent state on reset (recurrent actors only) |
 
-``state`` is therefore 3 normalised values per observed part (18 for all six) plus, with the
-timestamp, ``1 + 2 harmonics`` time features and, with the ball clock, ``2 harmonics`` more
-(``state_size``). ``state_transforms`` builds the copy, the cast, the parts, the normalisation,
-the time features and the ball clock on their own, so that a trained actor runs outside TorchRL
-(``jugglerl.policies.actor.ActorPolicy``) on exactly the same inputs.
+The copy, the cast, the parts, the normalisation, the time features and the ball clock come
+from ``jugglerl.state.transforms``, which a deployed actor (``jugglerl.policies.actor``) runs too.
 """
 
 from __future__ import annotations
@@ -35,34 +32,23 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 from torchrl.data import Unbounded
 from torchrl.envs import (
-    DoubleToFloat,
     EnvBase,
     GymWrapper,
     InitTracker,
     ObservationNorm,
-    RenameTransform,
     RewardSum,
     StepCounter,
-    Transform,
     TransformedEnv,
 )
 from torchrl.envs.libs.gym import default_info_dict_reader
 
-from jugglerl.offpolicy.actors import primer
-from jugglerl.offpolicy.ball_clock import BallClock, num_ball_clock_features
-from jugglerl.offpolicy.observation_parts import (
-    PART_SIZE,
-    WHOLE_OBSERVATION,
-    ObservationParts,
-    observed_parts,
-)
-from jugglerl.offpolicy.timestamp import TimestampFeatures, num_time_features
+from jugglerl.networks.actors import primer
+from jugglerl.state.transforms import state_transforms
 from jugglerl_envs import ENV_ID
 
 #: The info entries training and evaluation read, all numeric (see ``NumericInfo``), and their
 #: dtypes in the tensordict.
 INFO_KEYS = {"throws": torch.int64, "catches": torch.int64, "time": torch.float64}
-ACTION_SIZE = 3
 
 
 class NumericInfo(gym.Wrapper):
@@ -116,45 +102,6 @@ def make_vector_env(
 
 def _numeric_env(kwargs: dict) -> gym.Env:
     return NumericInfo(gym.make(ENV_ID, **kwargs))
-
-
-def _harmonics(state_cfg: DictConfig) -> int:
-    return state_cfg.get("harmonics", 1)  # runs saved before the key existed had one
-
-
-def state_size(state_cfg: DictConfig) -> int:
-    """Size of the networks' input ``state``: the observed parts and, optionally, time features
-    and the ball clock."""
-    harmonics = _harmonics(state_cfg)
-    size = PART_SIZE * len(observed_parts(state_cfg))
-    size += num_time_features(harmonics) if state_cfg.timestamp else 0
-    return size + (num_ball_clock_features(harmonics) if state_cfg.get("ball_clock") else 0)
-
-
-def state_transforms(
-    state_cfg: DictConfig, duration: float, loc: torch.Tensor | None, scale: torch.Tensor | None
-) -> list[Transform]:
-    """``state`` from the observation: copied, cast to float32, cut to ``state.observe``'s parts,
-    normalised and (with ``state_cfg.timestamp``, ``state_cfg.ball_clock``) given the time
-    features and the ball clock.
-
-    ``loc``/``scale`` of ``None`` leave the normalisation to be fitted by ``fit_normalisation``.
-    """
-    transforms: list[Transform] = [
-        RenameTransform(["observation"], ["state"], create_copy=True),
-        DoubleToFloat(in_keys=["state"]),
-    ]
-    parts = observed_parts(state_cfg)
-    if parts != WHOLE_OBSERVATION:
-        transforms.append(ObservationParts(parts))
-    norm = ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True)
-    transforms.append(norm)
-    harmonics = _harmonics(state_cfg)
-    if state_cfg.timestamp:
-        transforms.append(TimestampFeatures(duration, state_cfg.period, harmonics))
-    if state_cfg.get("ball_clock"):
-        transforms.append(BallClock(state_cfg.period, harmonics, state_cfg.ball_clock_height))
-    return transforms
 
 
 def make_env(

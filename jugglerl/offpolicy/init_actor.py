@@ -11,9 +11,9 @@ from __future__ import annotations
 from omegaconf import DictConfig, OmegaConf
 from torch import nn
 
-from jugglerl.commands import CommandError
-from jugglerl.offpolicy.actors.correction import Correction
+from jugglerl.networks.actors.correction import Correction
 from jugglerl.policies.actor_file import read_actor_weights
+from jugglerl.policy_files import PolicyFileError
 
 
 def _plain(node) -> dict:
@@ -26,7 +26,7 @@ def initial_weights(cfg: DictConfig) -> dict:
     spec = str(cfg.init_actor)
     try:
         weights = read_actor_weights(spec)
-    except CommandError as error:
+    except PolicyFileError as error:
         raise ValueError(f"init_actor={spec}: {error}") from None
     saved = weights["config"]
     ours = {key: value for key, value in _plain(cfg.actor).items() if key != "correction"}

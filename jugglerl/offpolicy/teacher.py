@@ -19,6 +19,8 @@ from tensordict.nn import TensorDictModuleBase
 
 from jugglerl.policies import Policy
 
+#: Where the teacher writes its action for each transition (the cloning loss and the
+#: teacher-centred exploration read it).
 TEACHER_ACTION = ("teacher", "action")
 
 

@@ -36,17 +36,11 @@ from tqdm import tqdm
 from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.config import make_juggle_env
 from jugglerl.interrupts import deferred_interrupt
-from jugglerl.offpolicy.actors import build_actor, recurrent_state
+from jugglerl.networks.actors import ACTION_SIZE, build_actor, recurrent_state
 from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.checks import check_config
-from jugglerl.offpolicy.env_stack import (
-    ACTION_SIZE,
-    make_env,
-    normalisation,
-    state_size,
-    state_transforms,
-)
+from jugglerl.offpolicy.env_stack import make_env, normalisation
 from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights
@@ -60,6 +54,7 @@ from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
 from jugglerl.run_files import write_json
+from jugglerl.state.transforms import state_size, state_transforms
 
 METRICS = "metrics.json"
 #: The history entries the progress bar shows.

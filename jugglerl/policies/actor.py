@@ -18,8 +18,8 @@ from tensordict.nn import TensorDictSequential
 from torchrl.envs import Transform
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
-from jugglerl.offpolicy.actors import build_actor, recurrent_state
-from jugglerl.offpolicy.env_stack import ACTION_SIZE, state_size, state_transforms
+from jugglerl.networks.actors import ACTION_SIZE, build_actor, recurrent_state
+from jugglerl.state.transforms import state_size, state_transforms
 
 
 class ActorPolicy:

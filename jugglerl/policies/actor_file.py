@@ -13,8 +13,7 @@ from pathlib import Path
 
 import yaml
 
-from jugglerl.commands import CommandError
-from jugglerl.policies.files import names_a_run, read_policy_file
+from jugglerl.policy_files import PolicyFileError, names_a_run, read_policy_file
 
 #: The parts of a run's config an actor policy needs (``ActorPolicy.from_config``).
 CONFIG_KEYS = ("actor", "state", "env")
@@ -26,17 +25,17 @@ def _weights_from_dict(data: dict, source: str) -> dict:
     import torch  # only actor files need it
 
     if data.get("kind") != "actor" or "weights" not in data:
-        raise CommandError(f"{source}: not a kind: actor file with 'weights: FILE.pt'")
+        raise PolicyFileError(f"{source}: not a kind: actor file with 'weights: FILE.pt'")
     path = Path(source).parent / data["weights"]
     if not path.is_file():
-        raise CommandError(f"{source}: no weights file at {path}")
+        raise PolicyFileError(f"{source}: no weights file at {path}")
     try:
         weights = torch.load(path, weights_only=False)
     except Exception as error:  # truncated, or not a torch file: pickle, zip and EOF errors
-        raise CommandError(f"{path}: not a readable weights file ({error})") from None
+        raise PolicyFileError(f"{path}: not a readable weights file ({error})") from None
     missing = [key for key in WEIGHT_KEYS if not isinstance(weights, dict) or key not in weights]
     if missing:
-        raise CommandError(f"{path}: not an actor's weights (no {', '.join(missing)})")
+        raise PolicyFileError(f"{path}: not an actor's weights (no {', '.join(missing)})")
     return weights
 
 
@@ -55,7 +54,7 @@ def read_actor_weights(spec: str) -> dict:
 
         state = load_checkpoint(spec)
         if state["deploys"] != "actor":
-            raise CommandError(f"{spec}: the run deploys {state['deploys']}, not an actor")
+            raise PolicyFileError(f"{spec}: the run deploys {state['deploys']}, not an actor")
         return state
     return _weights_from_dict(*read_policy_file(spec))
 

@@ -6,13 +6,13 @@ from pathlib import Path
 
 import gymnasium as gym
 
-from jugglerl.commands import CommandError, command_from_dict
+from jugglerl.commands import command_from_dict
 from jugglerl.policies import Policy
 from jugglerl.policies.actor_file import actor_policy_from_dict
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
-from jugglerl.policies.files import names_a_run, read_policy_file
 from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
+from jugglerl.policy_files import PolicyFileError, names_a_run, read_policy_file
 
 #: Policy file kinds and their readers (``data, source, env -> Policy``).
 FILE_KINDS = {
@@ -36,7 +36,7 @@ def load_policy(spec: str, env: gym.Env) -> Policy:
     data, source = read_policy_file(spec)
     kind = data.get("kind", "command")
     if kind not in FILE_KINDS:
-        raise CommandError(
+        raise PolicyFileError(
             f"{source}: kind={kind!r} is not a policy kind; use one of {', '.join(FILE_KINDS)}"
         )
     return FILE_KINDS[kind](data, source, env)

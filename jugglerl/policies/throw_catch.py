@@ -44,8 +44,8 @@ import numpy as np
 
 from jugglerl.commands import CommandError
 from jugglerl.policies.cup_ik import CupIK
-from jugglerl.policies.files import write_policy_file
 from jugglerl.policies.flight_fit import FlightFit
+from jugglerl.policy_files import write_policy_file
 from jugglerl_envs.actions import ctrl_to_action
 
 KIND = "throw_catch"

@@ -15,6 +15,7 @@ from __future__ import annotations
 import torch
 from omegaconf import DictConfig
 
+from jugglerl.dps.closed_loop_space import ClosedLoopSpace, GainBox, gains_from_params
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.params import (
     ViaPointConstraints,
@@ -23,7 +24,6 @@ from jugglerl.dps.params import (
     params_to_command,
 )
 from jugglerl.dps.spaces import SPACES
-from jugglerl.dps.spaces.feedback_gains import ClosedLoopSpace, GainBox, gains_from_params
 from jugglerl.policies.feedback import PARAM_NAMES, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
 

@@ -22,16 +22,16 @@ import numpy as np
 import torch
 from omegaconf import DictConfig
 
+from jugglerl.dps.closed_loop_space import BEST_POLICY, ClosedLoopSpace
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces import SPACES
-from jugglerl.dps.spaces.feedback_gains import BEST_POLICY, ClosedLoopSpace
-from jugglerl.policies.files import read_policy_file
 from jugglerl.policies.throw_catch import (
     ThrowCatch,
     ThrowCatchPolicy,
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
+from jugglerl.policy_files import read_policy_file
 
 #: The scalars after the knots, in θ order.
 SCALARS = ("catch_height", "settle", "carry")

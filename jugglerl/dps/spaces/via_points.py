@@ -15,7 +15,7 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.cluster import is_distributed, open_cluster
-from jugglerl.commands import ViaPointCommand
+from jugglerl.commands import ViaPointCommand, load_command, save_command
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.cluster_rollouts import ClusterCommandRollouts
 from jugglerl.dps.distribution import SearchDistribution
@@ -27,7 +27,7 @@ from jugglerl.dps.params import (
 )
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.dps.spaces import SPACES
-from jugglerl.policies.command import CommandPolicy, load_command, save_command
+from jugglerl.policies.command import CommandPolicy
 from jugglerl_envs.juggle import MAX_RESET_NOISE
 from jugglerl_envs.validation import check_number
 

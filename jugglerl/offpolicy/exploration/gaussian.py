@@ -22,15 +22,14 @@ from tensordict import TensorDictBase
 from tensordict.nn import TensorDictModuleBase
 from torchrl.envs.utils import ExplorationType, exploration_type
 
-from jugglerl.commands import ViaPointCommand
+from jugglerl.commands import ViaPointCommand, load_command
+from jugglerl.networks.reference import CommandReference
 from jugglerl.offpolicy.exploration import EXPLORATIONS
-from jugglerl.offpolicy.reference import CommandReference
-from jugglerl.policies.command import load_command
+from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl_envs.actions import ctrl_to_action
 
 #: Samples over one cycle that define a command's average action.
 AVERAGE_SAMPLES = 1000
-TEACHER_ACTION = ("teacher", "action")
 
 
 class CommandCentre:

@@ -19,8 +19,7 @@ from torchrl.objectives import LossModule
 
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.losses.update import Update
-
-TEACHER_ACTION = ("teacher", "action")
+from jugglerl.offpolicy.teacher import TEACHER_ACTION
 
 
 def behaviour_cloning_loss(actor: TensorDictModule, batch: TensorDictBase) -> torch.Tensor:
@@ -60,8 +59,8 @@ class BehaviourCloning(Update):
 
     Why the average: a cloned actor's closed loop is chaotic in its weights. With the trained
     actor deployed, evaluations 20,480 frames apart swung between 2 and 13 throws in 30 s; the
-    average of the last ≈ 1/bc_tau updates juggled through four evaluations in a row (README,
-    Learning from the teacher).
+    average of the last ≈ 1/bc_tau updates juggled through four evaluations in a row
+    (docs/results/apprentice.md).
     """
 
     def __init__(self, actor, state_size, action_spec, cfg, recurrent: bool = False):

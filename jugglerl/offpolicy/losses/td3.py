@@ -20,7 +20,7 @@ from tensordict import TensorDictBase
 from torchrl.modules import set_recurrent_mode
 from torchrl.objectives import TD3Loss, ValueEstimators
 
-from jugglerl.offpolicy.critic import make_critic
+from jugglerl.networks.critic import make_critic
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.losses.bc import add_cloning_term
 from jugglerl.offpolicy.losses.update import Update, check_rl_config

@@ -14,7 +14,7 @@ from omegaconf import DictConfig
 from tensordict.nn import TensorDictModule
 from torchrl.objectives import LossModule, SoftUpdate
 
-from jugglerl.offpolicy.actors.correction import trained_parameters
+from jugglerl.networks.actors.correction import trained_parameters
 
 
 class FlatSoftUpdate(SoftUpdate):
@@ -51,7 +51,7 @@ def check_rl_config(algo: DictConfig) -> None:
 
 class Update:
     """Adam for the part of the actor the stage trains (``optim.trains``: its base or its
-    correction, ``jugglerl.offpolicy.actors.correction``; ``optim.lr_actor``) and, given
+    correction, ``jugglerl.networks.actors.correction``; ``optim.lr_actor``) and, given
     ``critic_params``, for the critics (``optim.lr_critic``, ``optim.weight_decay``); clipping
     at ``optim.max_grad_norm`` (``null``: none); soft targets of ``loss`` with ``algo.tau`` when
     it has targets."""

@@ -14,10 +14,10 @@ from tensordict.nn import TensorDictSequential
 from torch import nn
 from torchrl.modules import MLP
 
-from jugglerl.offpolicy.actors import ACTORS, FeedForward
-from jugglerl.offpolicy.modules import TensorModule
-from jugglerl.offpolicy.reference import CommandReference
-from jugglerl.policies.command import load_command
+from jugglerl.commands import load_command
+from jugglerl.networks.actors import ACTORS, FeedForward
+from jugglerl.networks.modules import TensorModule
+from jugglerl.networks.reference import CommandReference
 
 
 class ResidualNetwork(nn.Module):

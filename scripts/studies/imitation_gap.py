@@ -1,6 +1,7 @@
 """How far a student strays from its teacher on the student's own episode, and where it drops.
 
-    python scripts/imitation_gap.py STUDENT [--teacher closed_loop] [--seed 0] [--duration 120]
+    python scripts/studies/imitation_gap.py STUDENT [--teacher closed_loop] [--seed 0] \
+        [--duration 120]
 
 STUDENT and ``--teacher`` are ``policy=`` specs (a shipped name, a policy file, a training run).
 The student acts; the teacher, stepped on the same observations, labels every step, as in

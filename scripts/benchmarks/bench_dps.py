@@ -1,7 +1,8 @@
 """Roll-out throughput of DPS's command evaluation against a bare ``mujoco.rollout``.
 
-    python scripts/bench_dps.py [--commands 16] [--duration 120] [--threads 2] [--repeats 3]
-    python scripts/bench_dps.py --ray HEAD:6379 [--chunk 1]   # also as Ray tasks (cluster=ray)
+    python scripts/benchmarks/bench_dps.py [--commands 16] [--duration 120] [--threads 2] \
+        [--repeats 3]
+    python scripts/benchmarks/bench_dps.py --ray HEAD:6379 [--chunk 1]   # also as Ray tasks
 
 Samples commands around the expert from DPS's search distribution (the paper's stds), then times,
 on the same model, start states, controls and thread count:
@@ -28,11 +29,11 @@ from mujoco import rollout
 from omegaconf import OmegaConf
 
 from jugglerl.cluster import open_cluster
+from jugglerl.commands import load_command
 from jugglerl.dps.cluster_rollouts import ClusterCommandRollouts
 from jugglerl.dps.distribution import sample_commands
 from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
 

@@ -6,7 +6,7 @@ time the falling ball passes ``LOCK_HEIGHT`` above the cup, so after a few throw
 the episode clock have drifted apart, and a network that sees only the episode clock cannot
 tell where the teacher is in its command (offline, an MLP imitating a teacher that resets its
 phase at each lock erred on the elbow by RMS 0.057 in normalised action units with the episode
-clock, 0.018 with this one, 0.014 given the teacher's phase itself; see the README).
+clock, 0.018 with this one, 0.014 given the teacher's phase itself; docs/results/apprentice.md).
 This transform measures that event from the observation, as the teacher does, and appends
 ``phase_features`` of the time since it (``2 harmonics`` values) to ``state``:
 
@@ -29,8 +29,8 @@ from tensordict import TensorDictBase
 from torchrl.data import Binary, Unbounded
 from torchrl.envs import Transform
 
-from jugglerl.offpolicy.state_spec import resized
-from jugglerl.offpolicy.timestamp import phase_features
+from jugglerl.state.spec import resized
+from jugglerl.state.timestamp import phase_features
 
 #: Observation indices (``jugglerl_envs.measurements``): ball z and vz, cup z and vz.
 BALL_Z, BALL_VZ, CUP_Z, CUP_VZ = 8, 11, 14, 17

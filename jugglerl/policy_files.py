@@ -13,12 +13,15 @@ from pathlib import Path
 
 import yaml
 
-from jugglerl.commands import CommandError
 from jugglerl.run_files import write_atomically
 
 SHIPPED_PACKAGE = "jugglerl_envs.assets"
 SHIPPED_FOLDER = "policies"
 SUFFIXES = (".yaml", ".yml", ".json")
+
+
+class PolicyFileError(ValueError):
+    """A policy file that cannot be used; the message says what and where."""
 
 
 def shipped_folder() -> Path:
@@ -31,13 +34,13 @@ def shipped_names() -> list[str]:
 
 
 def policy_file(name_or_path: str | Path) -> Path:
-    """The file a shipped name or a path names; ``CommandError`` listing the shipped names if
+    """The file a shipped name or a path names; ``PolicyFileError`` listing the shipped names if
     there is none."""
     path = Path(name_or_path)
     if path.suffix.lower() not in SUFFIXES:
         path = shipped_folder() / f"{name_or_path}.yaml"
     if not path.is_file():
-        raise CommandError(
+        raise PolicyFileError(
             f"no policy file at {path}; shipped policies: {', '.join(shipped_names())}"
         )
     return path
@@ -57,9 +60,9 @@ def read_policy_file(name_or_path: str | Path) -> tuple[dict, str]:
         text = path.read_text()
         data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as error:
-        raise CommandError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from None
+        raise PolicyFileError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from None
     if not isinstance(data, dict):
-        raise CommandError(f"{path}: expected a mapping with a 'kind' key")
+        raise PolicyFileError(f"{path}: expected a mapping with a 'kind' key")
     return data, str(path)
 
 

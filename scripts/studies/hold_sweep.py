@@ -1,7 +1,8 @@
 """How short a hold an open-loop command tolerates: throws as one via-point's hold is cut.
 
-    python scripts/hold_sweep.py [--command dps_best] [--hold 0] [--cuts 0,0.05,0.1,0.15,0.16,0.2]
-                                 [--lead-in S] [--seeds 10] [--reset-noise 0.01] [--duration 120]
+    python scripts/studies/hold_sweep.py [--command dps_best] [--hold 0] \
+        [--cuts 0,0.05,0.1,0.15,0.16,0.2] [--lead-in S] [--seeds 10] [--reset-noise 0.01] \
+        [--duration 120]
 
 For each cut, via-point ``--hold`` is held that many seconds less and everything after it moves
 earlier (``ViaPointCommand.shorten_hold``): the cycle shrinks, the throw and the flight keep their
@@ -21,8 +22,8 @@ import math
 import sys
 from dataclasses import replace
 
+from jugglerl.commands import load_command
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.policies.command import load_command
 from jugglerl_envs import JuggleEnv
 
 

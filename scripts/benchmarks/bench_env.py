@@ -1,6 +1,6 @@
 """Env steps per second with the ball in flight and resting in the cup.
 
-    python scripts/bench_env.py [--frame-skip 10] [--steps 20000] [--repeats 3]
+    python scripts/benchmarks/bench_env.py [--frame-skip 10] [--steps 20000] [--repeats 3]
 
 Prints the median of ``--repeats`` timings for each case, for the bare ``JuggleEnv`` and for
 ``gymnasium.make`` (which adds Gymnasium's checking wrappers).

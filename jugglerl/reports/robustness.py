@@ -7,7 +7,7 @@ flight. ``measure`` runs every policy (open-loop commands and trained checkpoint
 in worker processes; ``summarise`` turns the episodes into rows of mean throws, fraction of the
 policy's own nominal throws and time to drop, and ``breaking_points`` finds, per family, the first
 magnitude where a reference open-loop policy falls below a fraction of its nominal, and what the
-others keep there. ``markdown``/``plot`` render them for the README and the run directory.
+others keep there. ``markdown``/``plot`` render them for docs/results/ and the run directory.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
+from jugglerl.cluster.episode_pool import EpisodePool, EpisodeTask
 from jugglerl.config import make_juggle_env
-from jugglerl.episode_pool import EpisodePool, EpisodeTask
 from jugglerl.policies.loading import load_policy
 
 NOMINAL = "nominal"

@@ -11,8 +11,8 @@ from tensordict.nn import TensorDictSequential
 from torch import nn
 from torchrl.modules import MLP, LSTMModule
 
-from jugglerl.offpolicy.actors import ACTORS
-from jugglerl.offpolicy.modules import TensorModule
+from jugglerl.networks.actors import ACTORS
+from jugglerl.networks.modules import TensorModule
 
 HIDDEN, CELL = "recurrent_state_h", "recurrent_state_c"
 

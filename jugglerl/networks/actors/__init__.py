@@ -22,10 +22,13 @@ from omegaconf import DictConfig
 from torchrl.data import Unbounded
 from torchrl.envs import TensorDictPrimer
 
-from jugglerl.offpolicy.actors.correction import corrected
+from jugglerl.networks.actors.correction import corrected
 from jugglerl.registry import Registry
+from jugglerl_envs.scene import ACTUATED_JOINTS
 
 ACTORS = Registry("actor", __name__)
+#: An actor's action drives the pan, lift and elbow servos (normalised, ``jugglerl_envs.actions``).
+ACTION_SIZE = len(ACTUATED_JOINTS)
 
 
 class FeedForward:

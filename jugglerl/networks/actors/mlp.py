@@ -6,8 +6,8 @@ from tensordict.nn import TensorDictSequential
 from torch import nn
 from torchrl.modules import MLP
 
-from jugglerl.offpolicy.actors import ACTORS, FeedForward
-from jugglerl.offpolicy.modules import TensorModule
+from jugglerl.networks.actors import ACTORS, FeedForward
+from jugglerl.networks.modules import TensorModule
 
 
 @ACTORS.register("mlp")

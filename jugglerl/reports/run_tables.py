@@ -1,4 +1,4 @@
-"""The Markdown tables of training runs that the README reports, from the runs' ``metrics.json``.
+"""The Markdown tables of training runs that docs/results/ reports, from the runs' ``metrics.json``.
 
 - ``search_table``: search runs (``algo=dps|feedback``), one row per update rule, medians over
   seeds: best throws, roll-outs to the ``MILESTONES`` throw counts, throws kept with start noise;

@@ -1,7 +1,8 @@
 """Speed of the off-policy stack against bare PyTorch/MuJoCo loops doing the same work, in one run.
 
-    python scripts/bench_collect.py [--frames 20000] [--updates 300] [--repeats 3] [actor=mlp ...]
-    python scripts/bench_collect.py --ray HEAD:6379 [--collectors 2]   # also TorchRL's RayCollector
+    python scripts/benchmarks/bench_collect.py [--frames 20000] [--updates 300] [--repeats 3] \
+        [actor=mlp ...]
+    python scripts/benchmarks/bench_collect.py --ray HEAD:6379 [--collectors 2]   # and RayCollector
 
 1. One DDPG update (the ``ddpg`` loss: TorchRL's ``DDPGLoss`` + ``SoftUpdate``) against a bare
    PyTorch update of the same networks on the same batch (TD(0) target from target networks, L2
@@ -175,7 +176,7 @@ def main() -> None:
     parser.add_argument("--ray", metavar="ADDRESS", help="also time RayCollector on this cluster")
     parser.add_argument("--collectors", type=int, default=2, help="RayCollector's collectors")
     args, overrides = parser.parse_known_args()
-    configs = Path(__file__).resolve().parents[1] / "configs"
+    configs = Path(__file__).resolve().parents[2] / "configs"
     with initialize_config_dir(str(configs), version_base="1.3"):
         cfg = compose(
             "train", overrides=["algo=ddpg", "actor=mlp", "exploration=gaussian", *overrides]

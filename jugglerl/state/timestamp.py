@@ -12,7 +12,7 @@ The transform appends ``1 + 2 harmonics`` features to the networks' input ``stat
 More harmonics let a network draw the sharp turns of a command in its phase (offline, an MLP
 given the teacher's own phase imitated its elbow setpoint with half the error on 8 harmonics
 as on one: RMS 0.014 against 0.029). ``phase_features`` is shared with the ball clock
-(``jugglerl.offpolicy.ball_clock``).
+(``jugglerl.state.ball_clock``).
 
 ``time`` is the env's own clock (seconds since reset, from its info dict), so the features stay
 exact across resets of single sub-envs in a batch.
@@ -26,7 +26,7 @@ import torch
 from tensordict import TensorDictBase
 from torchrl.envs import Transform
 
-from jugglerl.offpolicy.state_spec import resized
+from jugglerl.state.spec import resized
 
 
 def num_time_features(harmonics: int) -> int:

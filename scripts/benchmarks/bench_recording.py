@@ -1,6 +1,6 @@
 """What recording to rerun costs: an evaluation episode's wall time and size, a metrics call.
 
-    python scripts/bench_recording.py [--policy expert] [--repeats 5] [--scene-fps 50]
+    python scripts/benchmarks/bench_recording.py [--policy expert] [--repeats 5] [--scene-fps 50]
 
 Runs the same 120 s episode of the policy (paper preset) without and with an ``EpisodeRecorder``
 logging into a ``RerunLogger`` file, alternating the two, and prints the medians and the recorded

@@ -19,7 +19,7 @@ from tensordict.nn import TensorDictSequential
 from torch import nn
 from torchrl.modules import MLP
 
-from jugglerl.offpolicy.modules import TensorModule
+from jugglerl.networks.modules import TensorModule
 
 BASE_ACTION = "base_action"
 #: What a stage's updates may train (``trains``).

@@ -9,7 +9,7 @@ from omegaconf import DictConfig
 from torch import nn
 from torchrl.modules import MLP
 
-from jugglerl.offpolicy.modules import TensorModule
+from jugglerl.networks.modules import TensorModule
 
 
 def make_critic(critic_cfg: DictConfig, state_size: int, action_size: int) -> TensorModule:

@@ -14,8 +14,8 @@ frame. ``state.observe`` lists the parts that make up the networks' ``state``, i
 All six observed parts is the default. The teacher (``FeedbackPolicy``) reads only the ball
 relative to the cup and the two velocities; a student given just that
 (``[ball_from_cup, ball_velocity, cup_velocity]`` and the clocks) cannot lean on where the arm
-is, but measured in ``algo=apprentice`` it did not hold the juggling cycle either (the README's
-"Learning from the teacher"), so the arm's state stays in by default.
+is, but measured in ``algo=apprentice`` it did not hold the juggling cycle either
+(docs/results/apprentice.md), so the arm's state stays in by default.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import torch
 from tensordict import TensorDictBase
 from torchrl.envs import Transform
 
-from jugglerl.offpolicy.state_spec import resized
+from jugglerl.state.spec import resized
 
 #: The observed parts: slices of the env's observation.
 OBSERVED = {

@@ -1,0 +1,1 @@
+"""The simulations of the one-off studies in ``scripts/studies/``."""
