@@ -64,6 +64,31 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert [(s.name, s.end) for s in short] == [("bc", 327680), ("dagger", 340000)]
 
 
+def test_who_acts_and_the_noise_are_the_centred_gaussian_they_stand_for():
+    spelled_out = {
+        0: "{centre: teacher, expert_weight_init: 1.0, expert_weight_end: 1.0,"
+        " sigma_init: 0.003, sigma_end: 0.003}",
+        1: "{centre: teacher, expert_weight_init: 0.0, expert_weight_end: 0.0,"
+        " sigma_init: 0.0, sigma_end: 0.0}",
+    }
+    overrides = [
+        override
+        for index, exploration in spelled_out.items()
+        for override in (
+            f"~algo.stages.{index}.acts",
+            f"~algo.stages.{index}.noise",
+            f"+algo.stages.{index}.exploration={exploration}",
+        )
+    ]
+    shorthand = stages_from_config(train_config("algo=apprentice"))
+    explicit = stages_from_config(train_config("algo=apprentice", *overrides))
+    for short, spelled in zip(shorthand, explicit, strict=True):
+        assert short.cfg.exploration == spelled.cfg.exploration
+    bc, dagger = shorthand
+    assert (bc.cfg.exploration.expert_weight_end, bc.cfg.exploration.sigma_end) == (1.0, 0.003)
+    assert (dagger.cfg.exploration.expert_weight_end, dagger.cfg.exploration.sigma_end) == (0, 0)
+
+
 def test_a_resume_says_which_stages_lose_their_demonstrations():
     drawing = "algo.rl_stage.demo_fraction=0.25"
     stages = stages_from_config(
@@ -93,6 +118,14 @@ def test_a_run_without_stages_is_one_stage_of_its_loss():
         ("algo.rl_stage.n_steps=0", "algo.stages[2].n_steps=0 must be >= 1"),
         ("algo.rl_stage.perturbed=3", "algo.stages[2].perturbed must map names to env"),
         ("algo.stages.0.demonstrations=false", "a demo_fraction needs a stage with demonstrations"),
+        ("algo.stages.0.acts=watcher", "algo.stages[0].acts=watcher must be one of teacher, stud"),
+        ("algo.stages.1.noise=-0.1", "algo.stages[1].noise=-0.1 must be a number >= 0"),
+        ("algo.rl_stage.noise=loud", "algo.stages[2].noise=loud must be a number >= 0"),
+        (
+            "+algo.rl_stage.exploration.sigma_init=0.01",
+            "algo.stages[2]: acts/noise set exploration ['sigma_init']; give them once",
+        ),
+        ("exploration=ou", "algo.stages[0]: acts and noise need exploration=gaussian (ou)"),
     ],
 )
 def test_bad_stage_settings_are_named(override, message):

@@ -10,8 +10,11 @@ then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
 | ``until`` | frame count at which the stage ends (the last: ``collector.total_frames``, which
   also cuts a stage short or leaves the later ones for a resume to reach) |
 | ``loss`` | the ``algo.loss`` the stage updates with (``bc``, ``ddpg``, ``td3``) |
-| ``exploration``, ``optim`` | keys of those groups replaced in this stage (the teacher's weight,
-  a learning rate) |
+| ``acts`` | who acts: ``teacher`` (the student watches: behaviour cloning) or ``student`` (the
+  actor acts, a teacher in the loop labels what it visits: DAgger, RL) |
+| ``noise`` | σ of the white noise added to whoever acts (normalised action units) |
+| ``exploration``, ``optim`` | keys of those groups replaced in this stage (a learning rate; any
+  exploration key that ``acts`` and ``noise`` do not set) |
 | ``bc_weight``, ``bc_weight_end`` | the RL losses' cloning weight, linear over the stage |
 | ``demonstrations`` | the stage's frames are kept as demonstrations too (a buffer of their own) |
 | ``demo_fraction`` | fraction of each sampled batch drawn from the demonstrations |
@@ -37,6 +40,8 @@ STAGE_KEYS = {
     "name",
     "until",
     "loss",
+    "acts",
+    "noise",
     "exploration",
     "optim",
     "bc_weight",
@@ -106,8 +111,10 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage_cfg.algo.loss = spec.get("loss", cfg.algo.loss)
         bc_weight = float(spec.get("bc_weight", cfg.algo.get("bc_weight", 0.0)))
         stage_cfg.algo.bc_weight = bc_weight
-        for group in ("exploration", "optim"):
-            stage_cfg[group] = OmegaConf.merge(cfg[group], spec.get(group, {}))
+        stage_cfg.exploration = OmegaConf.merge(
+            cfg.exploration, spec.get("exploration", {}), _who_acts(spec, cfg.exploration, where)
+        )
+        stage_cfg.optim = OmegaConf.merge(cfg.optim, spec.get("optim", {}))
         stage_cfg.optim.trains = str(spec.get("trains", "base"))
         stage_cfg.algo.n_steps = int(spec.get("n_steps", cfg.algo.get("n_steps", 1)))
         if stage_cfg.algo.n_steps < 1:
@@ -135,6 +142,34 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
     ):
         raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
     return stages
+
+
+#: ``acts``: the weight of the teacher's action in the exploration's centred Gaussian
+ACTORS_WEIGHT = {"teacher": 1.0, "student": 0.0}
+
+
+def _who_acts(spec: Mapping, exploration: DictConfig, where: str) -> dict:
+    """The exploration keys that a stage's ``acts`` and ``noise`` stand for (``gaussian``
+    centred on the teacher's action: its weight 1 when the teacher acts, 0 when the student
+    does; σ constant over the stage)."""
+    keys: dict = {}
+    if ("acts" in spec or "noise" in spec) and exploration.name != "gaussian":
+        raise ValueError(f"{where}: acts and noise need exploration=gaussian ({exploration.name})")
+    if "acts" in spec:
+        acts = spec["acts"]
+        if acts not in ACTORS_WEIGHT:
+            raise ValueError(f"{where}.acts={acts} must be one of {', '.join(ACTORS_WEIGHT)}")
+        weight = ACTORS_WEIGHT[acts]
+        keys.update(centre="teacher", expert_weight_init=weight, expert_weight_end=weight)
+    if "noise" in spec:
+        noise = spec["noise"]
+        if isinstance(noise, bool) or not isinstance(noise, (int, float)) or noise < 0:
+            raise ValueError(f"{where}.noise={noise} must be a number >= 0 (σ)")
+        keys.update(sigma_init=float(noise), sigma_end=float(noise))
+    overlap = sorted(set(keys) & set(spec.get("exploration") or {}))
+    if overlap:
+        raise ValueError(f"{where}: acts/noise set exploration {overlap}; give them once")
+    return keys
 
 
 def _variants(perturbed, where: str) -> tuple[dict, ...]:
