@@ -79,8 +79,14 @@ def test_the_clock_starts_at_each_episode_and_interpolates_the_crossing():
 
 
 def test_in_the_batched_stack_each_env_keeps_its_own_clock_across_resets():
-    cfg = train_config("algo=ddpg", "env.duration=3", "state.norm_frames=200",
-                       "collector.num_envs=2", "state.ball_clock=true", "state.harmonics=2")
+    cfg = train_config(
+        "algo=ddpg",
+        "env.duration=3",
+        "state.norm_frames=200",
+        "collector.num_envs=2",
+        "state.ball_clock=true",
+        "state.harmonics=2",
+    )
     torch.manual_seed(0)
     env = make_env(cfg, 2)
     check_env_specs(env)

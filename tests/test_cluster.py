@@ -23,12 +23,35 @@ RAY = Path(sys.executable).parent / "ray"
 #: the test cluster runs without Ray's token authentication: its nodes and drivers are children
 #: of this process on one machine
 NO_AUTH = {"RAY_AUTH_MODE": "disabled"}
-DPS = ["algo=dps", "algo.episodes=2", "algo.rollouts=4", "env.duration=10", "seed=3",
-       "algo.noise_check.seeds=2", "record_best=false", "progress=false"]
-FEEDBACK = ["algo=feedback", "algo.episodes=1", "algo.rollouts=2", "env.duration=5", "seed=1",
-            "algo.noise_check.seeds=0", "record_best=false", "progress=false"]
-ROBUSTNESS = ["policies=[expert,closed_loop]", "reference=expert", "seeds=2", "duration=8",
-              "select=[kicks]", "families.kicks.magnitudes=[0.1]", "progress=false"]
+DPS = [
+    "algo=dps",
+    "algo.episodes=2",
+    "algo.rollouts=4",
+    "env.duration=10",
+    "seed=3",
+    "algo.noise_check.seeds=2",
+    "record_best=false",
+    "progress=false",
+]
+FEEDBACK = [
+    "algo=feedback",
+    "algo.episodes=1",
+    "algo.rollouts=2",
+    "env.duration=5",
+    "seed=1",
+    "algo.noise_check.seeds=0",
+    "record_best=false",
+    "progress=false",
+]
+ROBUSTNESS = [
+    "policies=[expert,closed_loop]",
+    "reference=expert",
+    "seeds=2",
+    "duration=8",
+    "select=[kicks]",
+    "families.kicks.magnitudes=[0.1]",
+    "progress=false",
+]
 
 
 def _halve(items: list) -> list:
@@ -58,8 +81,15 @@ def _free_port() -> int:
 
 def _ray_start(*args: str, log: Path) -> subprocess.Popen:
     return subprocess.Popen(
-        [str(RAY), "start", "--block", "--num-cpus=1", "--disable-usage-stats",
-         "--object-store-memory=80000000", *args],
+        [
+            str(RAY),
+            "start",
+            "--block",
+            "--num-cpus=1",
+            "--disable-usage-stats",
+            "--object-store-memory=80000000",
+            *args,
+        ],
         stdout=subprocess.DEVNULL,
         stderr=log.open("w"),
         env={**os.environ, **NO_AUTH},
@@ -75,8 +105,9 @@ def ray_cluster(tmp_path_factory):
     logs = tmp_path_factory.mktemp("ray")
     port = _free_port()
     address = f"127.0.0.1:{port}"
-    nodes = [_ray_start("--head", f"--port={port}", "--include-dashboard=false",
-                        log=logs / "head.log")]
+    nodes = [
+        _ray_start("--head", f"--port={port}", "--include-dashboard=false", log=logs / "head.log")
+    ]
     try:
         deadline = time.monotonic() + 60
         while True:
@@ -93,8 +124,13 @@ def ray_cluster(tmp_path_factory):
             f"ray.init(address='{address}', logging_level='WARNING')\n"
             "while sum(node['Alive'] for node in ray.nodes()) < 2: time.sleep(0.2)\n"
         )
-        subprocess.run([sys.executable, "-c", waiting], env={**os.environ, **NO_AUTH},
-                       check=True, timeout=120, capture_output=True)
+        subprocess.run(
+            [sys.executable, "-c", waiting],
+            env={**os.environ, **NO_AUTH},
+            check=True,
+            timeout=120,
+            capture_output=True,
+        )
         yield address
     finally:
         for node in reversed(nodes):  # the second node first, while its head can see it go
@@ -128,27 +164,47 @@ def test_dps_on_ray_finds_the_same_command_as_locally(ray_cluster, tmp_path):
 
 def test_feedback_search_on_ray_finds_the_same_gains_as_locally(ray_cluster, tmp_path):
     _run("train.py", tmp_path / "local", *FEEDBACK)
-    _run("train.py", tmp_path / "ray", *FEEDBACK, "cluster=ray", "cluster.chunk=2",
-         f"cluster.address={ray_cluster}")
-    local, remote = (yaml.safe_load((tmp_path / d / "best_policy.yaml").read_text())
-                     for d in ("local", "ray"))
+    _run(
+        "train.py",
+        tmp_path / "ray",
+        *FEEDBACK,
+        "cluster=ray",
+        "cluster.chunk=2",
+        f"cluster.address={ray_cluster}",
+    )
+    local, remote = (
+        yaml.safe_load((tmp_path / d / "best_policy.yaml").read_text()) for d in ("local", "ray")
+    )
     assert remote["feedback"] == local["feedback"]
 
 
 def test_robustness_on_ray_measures_the_same_episodes_as_locally(ray_cluster, tmp_path):
     _run("robustness.py", tmp_path / "local", *ROBUSTNESS)
-    _run("robustness.py", tmp_path / "ray", *ROBUSTNESS, "cluster=ray",
-         f"cluster.address={ray_cluster}")
-    local, remote = (json.loads((tmp_path / d / "robustness.json").read_text())["rows"]
-                     for d in ("local", "ray"))
+    _run(
+        "robustness.py",
+        tmp_path / "ray",
+        *ROBUSTNESS,
+        "cluster=ray",
+        f"cluster.address={ray_cluster}",
+    )
+    local, remote = (
+        json.loads((tmp_path / d / "robustness.json").read_text())["rows"] for d in ("local", "ray")
+    )
     assert remote == local
     assert {row["family"] for row in local} == {"nominal", "kicks"}
 
 
 def test_a_sweep_on_ray_runs_each_job_into_its_own_run_directory(ray_cluster, tmp_path):
     result = run_script(
-        "train.py", "-m", *DPS[:-2], "algo.noise_check.seeds=0", "seed=0,1", "cluster=ray",
-        f"cluster.address={ray_cluster}", f"hydra.sweep.dir={tmp_path}", env=NO_AUTH,
+        "train.py",
+        "-m",
+        *DPS[:-2],
+        "algo.noise_check.seeds=0",
+        "seed=0,1",
+        "cluster=ray",
+        f"cluster.address={ray_cluster}",
+        f"hydra.sweep.dir={tmp_path}",
+        env=NO_AUTH,
     )
     assert result.returncode == 0, result.stderr[-3000:]
     assert "2 node(s), 2 CPUs" in result.stdout
@@ -162,8 +218,14 @@ def test_an_unreachable_cluster_is_one_error_line_naming_its_address(script, tmp
     pytest.importorskip("ray", reason="Ray is not installed (pip install -e '.[ray]')")
     address = f"127.0.0.1:{_free_port()}"  # nothing listens there
     overrides = DPS if script == "train.py" else ROBUSTNESS
-    result = run_script(script, *overrides, "cluster=ray", f"cluster.address={address}",
-                        f"hydra.run.dir={tmp_path}", timeout=60)
+    result = run_script(
+        script,
+        *overrides,
+        "cluster=ray",
+        f"cluster.address={address}",
+        f"hydra.run.dir={tmp_path}",
+        timeout=60,
+    )
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1].startswith(f"error: cluster.address={address}:")
     assert "Traceback" not in result.stderr

@@ -11,8 +11,9 @@ from jugglerl.studies import earth_throw
 
 #: The best throw of ``python scripts/studies/earth_throw.py`` (defaults, seed 1), as it prints
 #: it: a wind-up raising the upper arm, then lift and elbow swinging up together (env=earth).
-FOUND = np.array([-1.507, 1.675, 0.187,  # start lift, elbow, tilt; then knots (s, lift, elbow)
-                  0.58, -0.640, 1.640, 0.246, -1.516, 0.649, 0.29, 0.0, 2.696])
+START = [-1.507, 1.675, 0.187]  # lift, elbow (rad), tilt
+KNOTS = [[0.58, -0.640, 1.640], [0.246, -1.516, 0.649], [0.29, 0.0, 2.696]]  # s, lift, elbow
+FOUND = np.array(START + [value for knot in KNOTS for value in knot])
 
 
 def test_the_found_throw_clears_one_metre_within_pi_rad_per_s_and_the_cup_limit():
@@ -24,8 +25,9 @@ def test_the_found_throw_clears_one_metre_within_pi_rad_per_s_and_the_cup_limit(
 
 def test_the_experts_elbow_flick_does_not_leave_the_cup_at_earth():
     # expert.yaml's throw: elbow 2.15 -> 1.5 rad with the upper arm vertical, the cup upright
-    flick = np.array([-1.5708, 2.15, 0.15, 0.5, -1.5708, 1.5, 0.5, -1.5708, 2.15, 0.5, -1.5708,
-                      2.15])
+    flick = np.array(
+        [-1.5708, 2.15, 0.15, 0.5, -1.5708, 1.5, 0.5, -1.5708, 2.15, 0.5, -1.5708, 2.15]
+    )
     throw = earth_throw.simulate(flick)
     assert throw is not None and throw.throws == 0 and throw.apex == 0.0  # never leaves
     assert max(throw.peak_speed) < 0.7 * math.pi  # the lagging servo never reaches the limit
@@ -43,8 +45,9 @@ def test_a_short_search_prints_its_throw_and_bad_budgets_are_one_error_line():
 
 
 def test_the_score_is_the_apex_less_the_cup_overshoot_and_the_weighted_landing_distance():
-    throw = earth_throw.Throw(apex=1.2, max_cup=0.8, peak_speed=(0.0, 1.0, 1.0),
-                              landing_offset=0.3, throws=1)
+    throw = earth_throw.Throw(
+        apex=1.2, max_cup=0.8, peak_speed=(0.0, 1.0, 1.0), landing_offset=0.3, throws=1
+    )
     assert earth_throw.score(throw, max_cup=0.76) == pytest.approx(1.2 - 0.4)
     assert earth_throw.score(throw, 0.76, landing_weight=2.0) == pytest.approx(1.2 - 0.4 - 0.6)
     assert earth_throw.score(None, 0.76) == -1.0

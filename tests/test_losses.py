@@ -130,8 +130,11 @@ def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it
     for _ in range(4):
         update(batch)
         weights = {k: v.detach().clone() for k, v in actor.state_dict().items()}
-        expected = weights if expected is None else {
-            k: expected[k] + 0.25 * (weights[k] - expected[k]) for k in weights}
+        expected = (
+            weights
+            if expected is None
+            else {k: expected[k] + 0.25 * (weights[k] - expected[k]) for k in weights}
+        )
     deployed = update.target_actor().state_dict()
     for key, value in expected.items():
         torch.testing.assert_close(deployed[key], value)

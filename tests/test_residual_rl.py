@@ -98,9 +98,7 @@ def test_updates_of_the_correction_never_move_the_base(loss):
     batch = data[:, :16]  # 2 sub-trajectories of 16 steps
     for _ in range(4):
         update(batch)
-    moved = {
-        name for name, p in actor.named_parameters() if not torch.equal(p, before[name])
-    }
+    moved = {name for name, p in actor.named_parameters() if not torch.equal(p, before[name])}
     owned = {name for name, p in actor.named_parameters() if id(p) in correction}
     assert moved and moved <= owned
 

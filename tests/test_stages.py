@@ -178,8 +178,13 @@ def test_the_default_pipeline_trains_only_the_correction_in_rl_and_resumes_insid
     """BC, DAgger, then two batches of residual RL (no warm-up), killed after the first: the
     resume continues inside the rl stage, the clone under the correction never moves, the
     correction does."""
-    cfg = train_config(*STAGED, "algo.rl_stage.warmup_frames=0", "actor=lstm",
-                       "replay_buffer.slice_len=16", "algo.rl_stage.optim.lr_actor=1e-2")
+    cfg = train_config(
+        *STAGED,
+        "algo.rl_stage.warmup_frames=0",
+        "actor=lstm",
+        "replay_buffer.slice_len=16",
+        "algo.rl_stage.optim.lr_actor=1e-2",
+    )
     cfg.collector.total_frames = 384  # stop after the first rl batch
     _, first = train(cfg, tmp_path / "run")
     assert first.stage.name == "rl" and first.stage.cfg.optim.trains == "correction"

@@ -77,8 +77,11 @@ def test_its_cycle_runs_through_the_four_modes_in_order():
 
 def test_from_a_home_that_is_not_its_rest_pose_it_carries_the_settled_ball_there_first():
     params = ThrowCatch(  # at the paper preset: the expert's elbow flick from a raised rest pose
-        rest=(0.0, -1.5708, 2.0), wrist_angles=(-2.0, 1.5708, 0.0),
-        knots=((0.15, -1.5708, 1.35), (0.3, -1.5708, 2.0)), catch_height=0.6, settle=0.3,
+        rest=(0.0, -1.5708, 2.0),
+        wrist_angles=(-2.0, 1.5708, 0.0),
+        knots=((0.15, -1.5708, 1.35), (0.3, -1.5708, 2.0)),
+        catch_height=0.6,
+        settle=0.3,
         carry=0.3,
     )
     env = JuggleEnv(duration=4.0)
@@ -137,7 +140,10 @@ def test_malformed_files_are_one_line_errors(change, message):
 
 def test_evaluate_reports_the_earth_juggler_cup_height_and_joint_speeds(tmp_path):
     result = run_script(
-        "evaluate.py", "policy=earth_juggler", "env=earth", "duration=20",
+        "evaluate.py",
+        "policy=earth_juggler",
+        "env=earth",
+        "duration=20",
         f"hydra.run.dir={tmp_path}",
     )
     assert result.returncode == 0, result.stderr[-2000:]

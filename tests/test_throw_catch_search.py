@@ -47,7 +47,10 @@ def test_train_throw_catch_writes_a_policy_that_evaluate_replays(tmp_path):
     assert metrics["rollouts"] == 2 and len(metrics["throw_catch"]["knots"]) == 3
     assert "throw_catch (cmaes): best scored" in result.stdout
     evaluated = run_script(
-        "evaluate.py", f"policy={run_dir}", "env=earth", "duration=6",
+        "evaluate.py",
+        f"policy={run_dir}",
+        "env=earth",
+        "duration=6",
         f"hydra.run.dir={tmp_path / 'eval'}",
     )
     assert evaluated.returncode == 0, evaluated.stderr
@@ -56,8 +59,14 @@ def test_train_throw_catch_writes_a_policy_that_evaluate_replays(tmp_path):
 
 def test_episodes_beyond_the_limits_score_no_throws():
     metrics = EpisodeMetrics(
-        throws=10, catches=10, max_consecutive_catches=10, time_to_drop=None, duration=10.0,
-        seed=0, max_cup_height=0.7, peak_joint_speed=(0.1, 3.0, 2.0),
+        throws=10,
+        catches=10,
+        max_consecutive_catches=10,
+        time_to_drop=None,
+        duration=10.0,
+        seed=0,
+        max_cup_height=0.7,
+        peak_joint_speed=(0.1, 3.0, 2.0),
     )
     assert within_limits(metrics, {})
     assert within_limits(metrics, {"max_cup_height": 0.76, "max_joint_speed": 3.14})

@@ -93,9 +93,7 @@ def make_vector_env(
         for index in range(num_envs)
     ]
     try:
-        return gym.vector.SyncVectorEnv(
-            makers, autoreset_mode=gym.vector.AutoresetMode.DISABLED
-        )
+        return gym.vector.SyncVectorEnv(makers, autoreset_mode=gym.vector.AutoresetMode.DISABLED)
     except TypeError as error:  # an unknown key in the env group
         raise ValueError(f"env config: {error}") from None
 

@@ -32,9 +32,7 @@ class CupIK:
         self.data = mujoco.MjData(self.model)
         self.iterations = iterations
         arm = len(scene.ACTUATED_JOINTS)
-        self._dofs = np.array(
-            [self.model.joint(name).dofadr[0] for name in scene.ACTUATED_JOINTS]
-        )
+        self._dofs = np.array([self.model.joint(name).dofadr[0] for name in scene.ACTUATED_JOINTS])
         self._qpos = np.array([self.model.joint(name).qposadr[0] for name in scene.ARM_JOINTS])
         self._wrist = np.asarray(wrist_angles, dtype=float)
         self._site = self.model.site(scene.CUP_SITE).id

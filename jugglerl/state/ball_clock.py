@@ -47,9 +47,7 @@ class BallClock(Transform):
 
     carried_keys = (LOCK, ARMED)
 
-    def __init__(
-        self, period: float, harmonics: int = 1, height: float = 0.2, rearm: float = 0.05
-    ):
+    def __init__(self, period: float, harmonics: int = 1, height: float = 0.2, rearm: float = 0.05):
         if period <= 0 or height <= 0 or rearm < 0:
             raise ValueError(
                 f"ball clock: period={period} and height={height} must be > 0, rearm={rearm} >= 0"

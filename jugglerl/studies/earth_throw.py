@@ -114,8 +114,9 @@ def search(restarts: int, generations: int, seed: int, max_cup: float, landing_w
     for restart in range(restarts):
         lift, elbow = rng.uniform(-1.8, -0.6), rng.uniform(1.0, 2.4)
         knots = np.tile([0.15, lift - 0.6, elbow - 0.6], KNOTS)
-        es = CMA(mean=np.r_[lift, elbow, 0.0, knots], sigma=0.3, seed=seed + restart,
-                 population_size=16)
+        es = CMA(
+            mean=np.r_[lift, elbow, 0.0, knots], sigma=0.3, seed=seed + restart, population_size=16
+        )
         for _ in range(generations):
             told = []
             for _ in range(es.population_size):

@@ -106,8 +106,10 @@ def time_on_ray(args, commands, steps: int, our_rate: float, throws: np.ndarray)
         list(cluster.map(echo, list(range(args.noop_tasks))))
         per_task = (time.perf_counter() - start) * cpus / -(-args.noop_tasks // args.chunk)
     ray_rate = steps / statistics.median(times)
-    print(f"Ray tasks ({cpus:g} CPUs, {args.chunk} per task) {ray_rate / 1e3:8.1f} k physics"
-          f" steps/s; same throws as here: {same}")
+    print(
+        f"Ray tasks ({cpus:g} CPUs, {args.chunk} per task) {ray_rate / 1e3:8.1f} k physics"
+        f" steps/s; same throws as here: {same}"
+    )
     print(f"Ray cost per task    {per_task * 1e3:.2f} CPU-ms")
     print(f"ratio Ray / ours     {ray_rate / our_rate:.3f}")
 

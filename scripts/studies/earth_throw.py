@@ -29,22 +29,27 @@ def main() -> None:
     parser.add_argument("--generations", type=int, default=60)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--max-cup", type=float, default=0.76, help="m, the cup's highest allowed")
-    parser.add_argument("--landing-weight", type=float, default=0.0,
-                        help="score lost per metre the ball lands from the start cup")
+    parser.add_argument(
+        "--landing-weight",
+        type=float,
+        default=0.0,
+        help="score lost per metre the ball lands from the start cup",
+    )
     args = parser.parse_args()
     if args.restarts < 1 or args.generations < 1:
         parser.error("--restarts and --generations must be >= 1")
     if args.landing_weight < 0:
         parser.error("--landing-weight must be >= 0")
-    x, throw = search(args.restarts, args.generations, args.seed, args.max_cup,
-                      args.landing_weight)
+    x, throw = search(args.restarts, args.generations, args.seed, args.max_cup, args.landing_weight)
     start, tilt, knots = decode(x)
     print(f"start pose (lift, elbow) {np.round(start, 3).tolist()} rad, cup tilt {tilt:+.3f} rad")
     for duration, lift, elbow in knots:
         print(f"  then for {duration:.3f} s towards lift {lift:.3f}, elbow {elbow:.3f} rad")
     speeds = ", ".join(f"{v:.2f}" for v in throw.peak_speed)
-    print(f"apex {throw.apex:.3f} m ({throw.throws} counted), cup at most {throw.max_cup:.3f} m,"
-          f" peak joint speeds {speeds} rad/s, lands {throw.landing_offset:.3f} m from the start")
+    print(
+        f"apex {throw.apex:.3f} m ({throw.throws} counted), cup at most {throw.max_cup:.3f} m,"
+        f" peak joint speeds {speeds} rad/s, lands {throw.landing_offset:.3f} m from the start"
+    )
 
 
 if __name__ == "__main__":

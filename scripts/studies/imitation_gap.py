@@ -69,9 +69,12 @@ def main() -> None:
         raise SystemExit(f"error: {error}") from None
     gaps = result["gaps"]
     print(f"{args.student}: {result['throws']} throws, ball up {result['seconds']:.1f} s")
-    print(f"gap to {args.teacher} (pan, lift, elbow): RMS",
-          np.array2string(np.sqrt((gaps**2).mean(0)), precision=4),
-          "p99", np.array2string(np.percentile(np.abs(gaps), 99, axis=0), precision=4))
+    print(
+        f"gap to {args.teacher} (pan, lift, elbow): RMS",
+        np.array2string(np.sqrt((gaps**2).mean(0)), precision=4),
+        "p99",
+        np.array2string(np.percentile(np.abs(gaps), 99, axis=0), precision=4),
+    )
     print("flight apexes (m):", " ".join(f"{a:.3f}" for a in result["apexes"]))
     print("landing offsets (m):", " ".join(f"{d:.3f}" for d in result["landings"]))
 

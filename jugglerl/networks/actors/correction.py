@@ -32,9 +32,7 @@ class Correction(nn.Module):
     def __init__(self, input_size: int, action_size: int, hidden: list[int], max_correction: float):
         super().__init__()
         if not 0 < max_correction <= 2:
-            raise ValueError(
-                f"actor.correction.max_correction={max_correction} must be in (0, 2]"
-            )
+            raise ValueError(f"actor.correction.max_correction={max_correction} must be in (0, 2]")
         self.max_correction = float(max_correction)
         self.body = MLP(input_size, action_size, num_cells=list(hidden))
         nn.init.zeros_(self.body[-1].weight)
@@ -63,9 +61,7 @@ def corrected(
             correction_cfg.hidden,
             correction_cfg.max_correction,
         )
-    module = TensorModule(
-        correction, ["state", "action", *features], ["action", BASE_ACTION]
-    )
+    module = TensorModule(correction, ["state", "action", *features], ["action", BASE_ACTION])
     return TensorDictSequential(*base.module, module)
 
 
@@ -74,9 +70,7 @@ def trained_parameters(actor: nn.Module, parameters, part: str) -> list[nn.Param
     training ``part`` updates: the correction's, or all the others (the base)."""
     if part not in PARTS:
         raise ValueError(f"trains={part!r} must be one of {', '.join(PARTS)}")
-    owned = {
-        id(p) for m in actor.modules() if isinstance(m, Correction) for p in m.parameters()
-    }
+    owned = {id(p) for m in actor.modules() if isinstance(m, Correction) for p in m.parameters()}
     if part == "correction" and not owned:
         raise ValueError("trains=correction needs an actor with actor.correction set")
     return [p for p in parameters if (id(p) in owned) == (part == "correction")]

@@ -69,8 +69,10 @@ class BehaviourCloning(Update):
         tau = cfg.algo.get("bc_tau")  # runs saved before the key existed had none
         if tau is not None and not 0 < tau <= 1:
             raise ValueError(f"algo.bc_tau={tau} must be in (0, 1] or null")
-        self.average = None if tau is None else AveragedModel(
-            actor, multi_avg_fn=get_ema_multi_avg_fn(1.0 - tau)
+        self.average = (
+            None
+            if tau is None
+            else AveragedModel(actor, multi_avg_fn=get_ema_multi_avg_fn(1.0 - tau))
         )
 
     def __call__(self, batch: TensorDictBase) -> dict[str, float]:
