@@ -15,7 +15,9 @@ from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy.stages import resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl.offpolicy.training import OffPolicyTraining
+from jugglerl.policies.loading import load_policy
 from jugglerl.training import resume_state
+from jugglerl_envs import JuggleEnv
 
 #: Three stages of 128 frames each, the critic warming up over the RL stage's first batch.
 STAGED = [
@@ -262,3 +264,32 @@ def test_plot_learning_draws_a_runs_evaluations_and_names_a_missing_run(tmp_path
         missing.stderr.strip()
         == f"error: no metrics.json in {tmp_path / 'nowhere'} (a finished off-policy run directory)"
     )
+
+
+TEACHERS = ("closed_loop", "closed_loop_gains")
+
+
+def test_the_phase_features_follow_the_teachers_cycle_and_a_resume_keeps_the_checkpoints(tmp_path):
+    """``state.period: teacher`` (the apprentice default) is the teacher's command cycle, resolved
+    when the run starts; a resume with another teacher keeps the number its checkpoint holds."""
+    env = JuggleEnv()
+    closed_loop, gains = (load_policy(name, env).command for name in TEACHERS)
+    assert closed_loop.cycle != gains.cycle
+    cfg = train_config(*STAGED)
+    assert cfg.state.period == "teacher"
+    cfg.collector.total_frames = 128
+    _, training = train(cfg, tmp_path / "run")
+    assert training.cfg.state.period == closed_loop.cycle
+    other = ["teacher.policy=closed_loop_gains"]
+    another = OffPolicyTraining(train_config(*STAGED, *other), tmp_path / "another")
+    assert another.cfg.state.period == gains.cycle
+    another.close()
+
+    overrides = [*other, "collector.total_frames=256"]
+    resumed, run_dir, state = resume_state(
+        str(tmp_path / "run"), train_config(*STAGED, *overrides), overrides
+    )
+    assert (
+        resumed.state.period == closed_loop.cycle and resumed.teacher.policy == "closed_loop_gains"
+    )
+    assert state["config"]["state"]["period"] == closed_loop.cycle

@@ -1,14 +1,17 @@
 """A teacher acting in the TorchRL loop: its batched labels are the plain policy's, step by step."""
 
 import numpy as np
+import pytest
 import torch
 from cli import train_config
 from tensordict.nn import TensorDictModule, TensorDictSequential
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
+from jugglerl.config import make_juggle_env
+from jugglerl.evaluation import run_episode
 from jugglerl.networks.actors import build_actor
 from jugglerl.offpolicy.env_stack import make_env
-from jugglerl.offpolicy.teacher import TEACHER_ACTION, TeacherModule
+from jugglerl.offpolicy.teacher import TEACHER_ACTION, TeacherModule, teacher_period
 from jugglerl.policies.loading import load_policy
 from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv
@@ -68,3 +71,26 @@ def test_a_teacher_driving_the_batch_juggles_as_it_does_alone():
         np.testing.assert_array_equal(data["action"][0, step].numpy(), action)
         observation, *_, info = plain.step(action)
     assert int(data["next", "throws"][0, -1]) == info["throws"] >= 3
+
+
+class Still:
+    """Holds the arm where it starts: never throws."""
+
+    def reset(self) -> None: ...
+
+    def act(self, observation, time):
+        return np.zeros(3, dtype=np.float32)
+
+
+def test_a_teachers_period_is_its_command_cycle_or_the_time_between_its_throws():
+    paper = JuggleEnv()
+    closed_loop = load_policy("closed_loop", paper)
+    assert teacher_period(closed_loop, paper) == closed_loop.command.cycle
+    earth = make_juggle_env(train_config("env=earth").env, duration=20.0)
+    juggler = load_policy("earth_juggler", earth)
+    assert not hasattr(juggler, "command")  # no cycle of its own: measured from its throws
+    period = teacher_period(juggler, earth)
+    throws = run_episode(earth, juggler, seed=0).throws
+    assert 20.0 / (throws + 1) < period < 20.0 / (throws - 1)  # throws every `period` s
+    with pytest.raises(ValueError, match="the teacher threw 0 times in an episode"):
+        teacher_period(Still(), JuggleEnv(duration=4.0))

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 
+import gymnasium as gym
 import numpy as np
 import torch
 from tensordict import TensorDictBase
@@ -48,3 +49,33 @@ class TeacherModule(TensorDictModuleBase):
                 policy.reset()
             actions[index] = policy.act(observations[index], float(times[index]))
         return tensordict.set(TEACHER_ACTION, torch.from_numpy(actions))
+
+
+def teacher_period(policy: Policy, env: gym.Env) -> float:
+    """The teacher's cycle (s), for the networks' phase features (``state.period: teacher``).
+
+    A policy that plays a cyclic command (``CommandPolicy``, ``FeedbackPolicy``) has its
+    command's cycle; any other (a throw-and-catch controller, a trained actor) the median time
+    between its throws over one episode of ``env`` from the standard start. ``ValueError`` if
+    it throws fewer than twice there.
+    """
+    command = getattr(policy, "command", None)
+    if command is not None:
+        return float(command.cycle)
+    observation, info = env.reset(seed=0)
+    policy.reset()
+    throw_times, throws = [], info["throws"]
+    terminated = truncated = False
+    while not (terminated or truncated):
+        observation, _, terminated, truncated, info = env.step(
+            policy.act(observation, info["time"])
+        )
+        if info["throws"] > throws:
+            throws = info["throws"]
+            throw_times.append(info["time"])
+    if len(throw_times) < 2:
+        raise ValueError(
+            f"state.period=teacher: the teacher threw {len(throw_times)} times in an episode"
+            " from the standard start, too few to time its cycle; give state.period in s"
+        )
+    return float(np.median(np.diff(throw_times)))

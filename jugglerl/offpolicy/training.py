@@ -47,16 +47,16 @@ from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
-from jugglerl.offpolicy.teacher import TeacherModule
+from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
+from jugglerl.policies import Policy
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
-from jugglerl.run_files import write_json
+from jugglerl.run_files import METRICS, write_json
 from jugglerl.state.transforms import state_size, state_transforms
 
-METRICS = "metrics.json"
 #: The history entries the progress bar shows.
 POSTFIX = ("throws_per_minute", "return", "throws")
 
@@ -69,6 +69,12 @@ class OffPolicyTraining:
         check_config(cfg)
         self.cfg = cfg
         self.run_dir = Path(run_dir)
+        teacher = self._load_teacher()
+        if cfg.state.period == "teacher":  # resolved here, so checkpoints keep the number
+            if teacher is None:
+                raise ValueError("state.period=teacher needs a teacher.policy")
+            with make_juggle_env(cfg.env) as env:
+                cfg.state.period = teacher_period(teacher, env)
         torch.manual_seed(cfg.seed)
         start = initial_weights(cfg) if state is None and cfg.get("init_actor") else None
         norm = (state or start or {}).get("normalisation", {"loc": None, "scale": None})
@@ -81,7 +87,7 @@ class OffPolicyTraining:
         if start is not None:
             load_base_weights(self.actor, start["policy"], cfg.init_actor)
         self.recurrent = bool(recurrent_state(cfg.actor))
-        self.teacher = self._teacher()
+        self.teacher = [] if teacher is None else [TeacherModule(teacher, cfg.collector.num_envs)]
         self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
         self.demonstrations = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
         self.evaluations = Evaluations(cfg)
@@ -108,13 +114,12 @@ class OffPolicyTraining:
         self.noise = make_exploration(stage.cfg.exploration, self.env.action_spec)
         self.policy = TensorDictSequential(*self.teacher, self.actor, self.noise)
 
-    def _teacher(self) -> list[TeacherModule]:
-        """The teacher acting in the loop, when ``teacher.policy`` names one."""
+    def _load_teacher(self) -> Policy | None:
+        """The policy ``teacher.policy`` names, to act in the loop (None without one)."""
         if self.cfg.teacher.policy is None:
-            return []
+            return None
         with make_juggle_env(self.cfg.env) as template:  # what the policy reads of the env
-            teacher = load_policy(str(self.cfg.teacher.policy), template)
-        return [TeacherModule(teacher, self.cfg.collector.num_envs)]
+            return load_policy(str(self.cfg.teacher.policy), template)
 
     # --- the loop -------------------------------------------------------------------------
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:
