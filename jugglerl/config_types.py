@@ -16,6 +16,9 @@ from hydra.core.override_parser.overrides_parser import OverridesParser
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 _ABSENT = object()
+#: Mappings whose entries are the user's to name (conditions, stages), checked where they are
+#: read; a ``+key`` anywhere else adds what nothing reads.
+OPEN_MAPPINGS = ("eval.perturbed", "algo.stages", "algo.rl_stage", "families", "hydra")
 
 
 def check_override_types(overrides: Sequence[str] | None = None) -> None:
@@ -36,10 +39,26 @@ def check_override_types(overrides: Sequence[str] | None = None) -> None:
     for override in parsed:
         if override.key_or_group in groups or override.is_delete() or override.is_sweep_override():
             continue
+        if override.is_add():
+            check_added_key(defaults, override.key_or_group, override.input_line)
+            continue
         default = OmegaConf.select(defaults, override.key_or_group, default=_ABSENT)
         problem = type_mismatch(default, override.value())
         if problem:
             raise ValueError(f"{override.input_line}: expected {problem}")
+
+
+def check_added_key(defaults: DictConfig, key: str, line: str) -> None:
+    """``ValueError`` for a ``+key`` that adds what nothing reads: a key outside the mappings
+    whose entries the user names (``OPEN_MAPPINGS``), naming the keys its parent has."""
+    if any(key == mapping or key.startswith(mapping + ".") for mapping in OPEN_MAPPINGS):
+        return
+    parent_key, _, name = key.rpartition(".")
+    parent = OmegaConf.select(defaults, parent_key) if parent_key else defaults
+    if not isinstance(parent, DictConfig) or name in parent:
+        return  # under a list or a value, or already there: the type check's or Hydra's
+    where = parent_key or "the config"
+    raise ValueError(f"{line}: nothing reads {key}; {where} has {', '.join(sorted(parent))}")
 
 
 def type_mismatch(default, value) -> str | None:

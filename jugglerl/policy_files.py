@@ -38,6 +38,11 @@ def policy_file(name_or_path: str | Path) -> Path:
     there is none."""
     path = Path(name_or_path)
     if path.suffix.lower() not in SUFFIXES:
+        if len(path.parts) > 1 or path.exists():  # a path, not a shipped name
+            raise PolicyFileError(
+                f"{path}: not a run directory, a checkpoint (.pt) or a policy file"
+                f" ({', '.join(SUFFIXES)}); shipped policies: {', '.join(shipped_names())}"
+            )
         path = shipped_folder() / f"{name_or_path}.yaml"
     if not path.is_file():
         raise PolicyFileError(

@@ -17,6 +17,9 @@ from typing import BinaryIO
 
 #: Below this many free bytes a failed write is put down to a full disk.
 FULL_DISK_BYTES = 1 << 20
+#: A run's results, written when it finishes: a run folder without it holds an unfinished run.
+METRICS = "metrics.json"
+PARTIAL = ".partial"
 
 
 class RunFileError(RuntimeError):
@@ -36,7 +39,7 @@ def failure(path: Path, action: str, cause: object) -> RunFileError:
 
 def write_atomically(path: Path, write: Callable[[BinaryIO], None]) -> None:
     """``write(file)`` into ``PATH.partial``, fsynced, then renamed over ``path``."""
-    partial = path.with_name(path.name + ".partial")
+    partial = path.with_name(path.name + PARTIAL)
     try:
         with open(partial, "wb") as file:
             write(file)

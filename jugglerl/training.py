@@ -17,6 +17,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
 from jugglerl.recording.logger import RerunLogger
+from jugglerl.run_files import METRICS, PARTIAL
 
 TRAINERS = {
     "offpolicy": "jugglerl.offpolicy.training:OffPolicyTraining",
@@ -44,16 +45,50 @@ def resume_state(resume: str, cfg: DictConfig, overrides: list[str]) -> tuple:
         raise ValueError(f"resume: {error}") from None
     path = Path(resume)
     saved = OmegaConf.create(state.get("config_unresolved", state["config"]))
-    for override in overrides:
-        key = override.split("=", 1)[0].lstrip("+~")
+    keys = [override.split("=", 1)[0].lstrip("+~") for override in overrides]
+    if "algo" in keys and cfg.algo.name != saved.algo.name:
+        raise ValueError(
+            f"resume: {resume} is an algo={saved.algo.name} run and continues as one;"
+            f" algo={cfg.algo.name} needs a new run"
+        )
+    for key in keys:
         if key != "resume" and not key.startswith("hydra"):
             OmegaConf.update(saved, key, OmegaConf.select(cfg, key), force_add=True)
     return saved, path if path.is_dir() else path.parent, state
 
 
+def check_cluster(cfg: DictConfig, sweeping: bool) -> None:
+    """``ValueError`` for a ``cluster=`` that a run would ignore: an off-policy run trains in
+    this process, so outside a sweep (whose jobs the cluster runs) only ``local`` applies."""
+    if not sweeping and cfg.algo.trainer == "offpolicy" and cfg.cluster.name != "local":
+        raise ValueError(
+            f"cluster={cfg.cluster.name}: an off-policy run trains in this process; a cluster runs"
+            " the searches' roll-outs (algo=dps|feedback|closed_loop|throw_catch) and a sweep's"
+            " jobs (-m)"
+        )
+
+
+def prepare_run_folder(run_dir: Path, resuming: bool, overwrite: bool) -> None:
+    """Make ``run_dir`` ready for a run: ``ValueError`` if a new run would mix its files with
+    another run's there (unless ``overwrite``: then that run's files go); stale partial
+    writes go; a resumed run's old ``metrics.json`` goes, as it is unfinished until it ends."""
+    found = [name for name in (CHECKPOINT, METRICS) if (run_dir / name).exists()]
+    if found and not resuming and not overwrite:
+        raise ValueError(
+            f"{run_dir} holds another run ({', '.join(found)}): continue it with resume={run_dir},"
+            " or start this one in another folder (hydra.run.dir=DIR) or over it (overwrite=true)"
+        )
+    stale = [run_dir / METRICS, *run_dir.glob(f"*{PARTIAL}")]
+    if not resuming:
+        stale += [run_dir / CHECKPOINT, *run_dir.glob("*.rrd")]
+    for path in stale:
+        path.unlink(missing_ok=True)
+
+
 def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
     """Run ``cfg``'s trainer in ``run_dir`` (resumed from ``state``), recording to its ``.rrd``;
     print the result, or on Ctrl-C how to continue."""
+    prepare_run_folder(run_dir, state is not None, bool(cfg.get("overwrite", False)))
     training = trainer_class(cfg.algo.trainer)(cfg, run_dir, state)
     if state is not None:
         print(f"resuming {run_dir} at {training.position()}")

@@ -23,12 +23,13 @@ from pathlib import Path
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config_types import check_override_types
 from jugglerl.run_files import RunFileError
-from jugglerl.training import resume_state, train
+from jugglerl.training import check_cluster, resume_state, train
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="train")
@@ -36,6 +37,7 @@ def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:
         check_override_types()
+        check_cluster(cfg, HydraConfig.get().mode == RunMode.MULTIRUN)
         state = None
         if cfg.resume is not None:
             overrides = list(HydraConfig.get().overrides.task)

@@ -63,6 +63,9 @@ def test_malformed_command_file_gives_a_clear_error(tmp_path, content, message):
 
 
 def test_missing_command_names_the_path_and_the_shipped_ones(tmp_path):
+    for path in ("/dev/null", tmp_path / "no_run_here"):  # a path is never a shipped name
+        with pytest.raises(PolicyFileError, match=f"^{path}: not a run directory, a checkpoint"):
+            load_command(path)
     with pytest.raises(PolicyFileError, match="no policy file at .*shipped policies: closed_loop,"):
         load_command("no_such_command")
     with pytest.raises(CommandError, match="kind='feedback' is not a command"):

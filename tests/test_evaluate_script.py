@@ -40,9 +40,10 @@ def test_evaluate_replays_a_command_file(tmp_path):
 def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
     for override, message in [
         ("policy=missing_command", "error: no policy file at"),
+        ("duration=0", "error: duration=0 is out of range"),  # evaluate.py's own key
         (
             "env.reward=style",
-            "error: reward='style' is not available; choose one of contacts, distance, juggle,",
+            "error: env.reward='style' is not available; choose one of contacts, distance, juggle,",
         ),
     ]:
         result = run_evaluate(override, f"hydra.run.dir={tmp_path}")

@@ -149,13 +149,29 @@ def test_train_script_trains_td3_resumes_and_evaluate_runs_its_run_directory(tmp
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming {tmp_path} at frame 256" in resumed.stdout
     assert json.loads((tmp_path / "metrics.json").read_text())["frames"] == 384
+    for algo in ("dps", "apprentice"):  # another algorithm is a new run
+        other = run_train(f"resume={tmp_path}", f"algo={algo}", "progress=false")
+        assert other.returncode == 1 and "Traceback" not in other.stderr
+        assert other.stderr.strip() == (
+            f"error: resume: {tmp_path} is an algo=td3 run and continues as one;"
+            f" algo={algo} needs a new run"
+        )
 
     evaluation = run_script(
         "evaluate.py", f"policy={tmp_path}", "duration=3", f"hydra.run.dir={tmp_path / 'eval'}"
     )
     assert evaluation.returncode == 0, evaluation.stderr
+    assert "warning" not in evaluation.stderr  # a finished run
     metrics = json.loads((tmp_path / "eval" / "metrics.json").read_text())
     assert 0 < metrics["duration"] <= 3
+
+    again = run_train(*TINY, f"hydra.run.dir={tmp_path}")  # a new run over the finished one
+    assert again.returncode == 1 and again.stderr.strip() == (
+        f"error: {tmp_path} holds another run (checkpoint.pt, metrics.json): continue it with"
+        f" resume={tmp_path}, or start this one in another folder (hydra.run.dir=DIR) or over"
+        " it (overwrite=true)"
+    )
+    assert json.loads((tmp_path / "metrics.json").read_text())["frames"] == 384  # untouched
 
 
 def test_ctrl_c_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
@@ -187,6 +203,14 @@ def test_ctrl_c_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
         ),
         ("+eval.perturbed.windy={gust:1}", "error: eval.perturbed.windy: env config:"),
         ("state.observe=[ball,elbow]", "error: state.observe=['ball', 'elbow']: one or more"),
+        ("env.duration=0", "error: env.duration=0 is out of range"),
+        ("env.reset_noise=10", "error: env.reset_noise=10 is out of range"),
+        ("+foo=1", "error: +foo=1: nothing reads foo; the config has actor, algo,"),
+        (
+            "+optim.momentum=0.9",
+            "error: +optim.momentum=0.9: nothing reads optim.momentum; optim has lr_actor,",
+        ),
+        ("cluster=ray", "error: cluster=ray: an off-policy run trains in this process"),
     ],
 )
 def test_a_bad_override_gives_a_clear_message(tmp_path, override, message):

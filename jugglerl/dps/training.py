@@ -36,9 +36,8 @@ from jugglerl.recording.blueprint import SEARCH_CURVES, training_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
-from jugglerl.run_files import write_json
+from jugglerl.run_files import METRICS, write_json
 
-METRICS = "metrics.json"
 #: Throw counts whose first roll-out is reported: the paper's DPS best, and this project's bar.
 MILESTONES = (39, 60)
 

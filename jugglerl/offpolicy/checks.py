@@ -45,6 +45,7 @@ def check_config(cfg: DictConfig) -> None:
             f"eval.perturbed_seeds={check.perturbed_seeds} must be >= 1 and"
             f" eval.perturbed_duration={check.perturbed_duration} > 0"
         )
+    make_juggle_env(cfg.env).close()  # the nominal env first: its keys blamed as env.KEY
     for name, overrides in conditions.items():  # fail now, not at the first evaluation
         try:
             make_juggle_env(cfg.env, **overrides).close()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import gymnasium as gym
@@ -13,6 +14,7 @@ from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
 from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
 from jugglerl.policy_files import PolicyFileError, names_a_run, read_policy_file
+from jugglerl.run_files import METRICS
 
 #: Policy file kinds and their readers (``data, source, env -> Policy``).
 FILE_KINDS = {
@@ -47,10 +49,16 @@ def _run_policy(path: Path, env: gym.Env) -> Policy:
     from jugglerl.checkpoints import load_checkpoint  # torch loads only for checkpoints
 
     state = load_checkpoint(path)
+    run_dir = path if path.is_dir() else path.parent
+    if not (run_dir / METRICS).exists():
+        print(
+            f"warning: {run_dir} holds an unfinished run (no {METRICS}: killed, still running or"
+            " resumed): its last checkpoint's policy",
+            file=sys.stderr,
+        )
     deploys = state["deploys"]
     if deploys == "actor":
         from jugglerl.policies.actor import ActorPolicy
 
         return ActorPolicy.from_state(state)
-    run_dir = path if path.is_dir() else path.parent
     return load_policy(str(run_dir / deploys), env)

@@ -19,8 +19,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from jugglerl.dps.training import MILESTONES
-
-METRICS = "metrics.json"
+from jugglerl.run_files import METRICS
 
 
 def run_metrics(folder: Path) -> list[dict]:
