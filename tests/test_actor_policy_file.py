@@ -3,6 +3,8 @@ on its own, and ``scripts/ship_actor.py`` writes a file that deploys what its ru
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import torch
@@ -10,13 +12,16 @@ from cli import train_config
 from omegaconf import OmegaConf
 
 import jugglerl.policies.feedback as feedback
+import jugglerl.policies.throw_catch as throw_catch
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode
 from jugglerl.networks.actors import ACTION_SIZE, build_actor
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.actor_file import write_actor_policy
 from jugglerl.policies.loading import load_policy
+from jugglerl.policy_files import PolicyFileError
 from jugglerl.state.transforms import state_size
+from jugglerl_envs import JuggleEnv
 
 
 def test_lstm_juggler_juggles_by_name_with_no_feedback_policy_built(monkeypatch):
@@ -35,6 +40,22 @@ def test_lstm_juggler_juggles_by_name_with_no_feedback_policy_built(monkeypatch)
     env.close()
     assert not built, "a FeedbackPolicy was built: the shipped network must act alone"
     assert episode.throws >= 39 and episode.max_cup_height <= 0.76
+
+
+def test_earth_lstm_juggles_at_real_gravity_as_a_network_alone(monkeypatch):
+    built = []
+    for kind in (feedback.FeedbackPolicy, throw_catch.ThrowCatchPolicy):
+        monkeypatch.setattr(kind, "__init__", lambda self, *args, **kwargs: built.append(self))
+    earth = make_juggle_env(train_config("env=earth").env, duration=10.0)
+    policy = load_policy("earth_lstm", earth)
+    assert isinstance(policy, ActorPolicy)
+    episode = run_episode(earth, policy, seed=0)
+    earth.close()
+    assert not built, "a hand-written controller was built: the shipped network must act alone"
+    assert episode.throws >= 3 and episode.time_to_drop is None  # a throw every 1.8 s after 2 s
+    assert max(episode.peak_joint_speed) <= math.pi and episode.max_cup_height <= 0.76
+    with pytest.raises(PolicyFileError, match=r"learnt at env.gravity=-9.81 \(env=earth\)"):
+        load_policy("earth_lstm", JuggleEnv())  # the paper's gravity
 
 
 def test_a_shipped_actor_file_acts_as_the_run_it_came_from(tmp_path):

@@ -39,11 +39,25 @@ def _weights_from_dict(data: dict, source: str) -> dict:
     return weights
 
 
-def actor_policy_from_dict(data: dict, source: str):
-    """The ``ActorPolicy`` of a ``kind: actor`` file read from ``source``."""
+def check_gravity(config: dict, env, source: str) -> None:
+    """``PolicyFileError`` when ``env`` pulls otherwise than the env an actor learnt in: a
+    network does not carry over between gravities (an earth actor drops the ball at once at the
+    paper's -2 m/s²)."""
+    learnt, here = config["env"].get("gravity", -2.0), env.unwrapped.gravity
+    if learnt != here:
+        preset = " (env=earth)" if learnt == -9.81 else ""
+        raise PolicyFileError(
+            f"{source}: the actor learnt at env.gravity={learnt}{preset}; this env has {here}"
+        )
+
+
+def actor_policy_from_dict(data: dict, source: str, env):
+    """The ``ActorPolicy`` of a ``kind: actor`` file read from ``source``, for ``env``."""
     from jugglerl.policies.actor import ActorPolicy
 
-    return ActorPolicy.from_state(_weights_from_dict(data, source))
+    weights = _weights_from_dict(data, source)
+    check_gravity(weights["config"], env, source)
+    return ActorPolicy.from_state(weights)
 
 
 def read_actor_weights(spec: str) -> dict:

@@ -9,7 +9,7 @@ import gymnasium as gym
 
 from jugglerl.commands import command_from_dict
 from jugglerl.policies import Policy
-from jugglerl.policies.actor_file import actor_policy_from_dict
+from jugglerl.policies.actor_file import actor_policy_from_dict, check_gravity
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
 from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
@@ -20,7 +20,7 @@ from jugglerl.run_files import METRICS
 FILE_KINDS = {
     "command": lambda data, source, env: CommandPolicy(command_from_dict(data, source)),
     "feedback": feedback_policy_from_dict,
-    "actor": lambda data, source, env: actor_policy_from_dict(data, source),
+    "actor": actor_policy_from_dict,
     "throw_catch": throw_catch_policy_from_dict,
 }
 
@@ -60,5 +60,6 @@ def _run_policy(path: Path, env: gym.Env) -> Policy:
     if deploys == "actor":
         from jugglerl.policies.actor import ActorPolicy
 
+        check_gravity(state["config"], env, str(path))
         return ActorPolicy.from_state(state)
     return load_policy(str(run_dir / deploys), env)
