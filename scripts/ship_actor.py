@@ -44,6 +44,15 @@ def header(run: Path, state: dict) -> str:
     return "\n".join(lines)
 
 
+def env_preset(run: Path) -> str | None:
+    """The env preset the run trained in (Hydra's record of its choices), unless ``paper``."""
+    hydra = run / ".hydra" / "hydra.yaml"
+    if not hydra.is_file():
+        return None
+    choice = yaml.safe_load(hydra.read_text())["hydra"]["runtime"]["choices"].get("env")
+    return None if choice in (None, "paper") else choice
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run", type=Path, help="a training run directory or its checkpoint.pt")
@@ -58,7 +67,7 @@ def main() -> None:
         raise SystemExit(f"error: {args.run} deploys {state['deploys']}, not a trained actor")
     run = args.run if args.run.is_dir() else args.run.parent
     folder = args.folder or shipped_folder()
-    print(write_actor_policy(state, folder, args.name, header(run, state)))
+    print(write_actor_policy(state, folder, args.name, header(run, state), env_preset(run)))
 
 
 if __name__ == "__main__":

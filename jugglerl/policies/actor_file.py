@@ -73,9 +73,12 @@ def read_actor_weights(spec: str) -> dict:
     return _weights_from_dict(*read_policy_file(spec))
 
 
-def write_actor_policy(state: dict, folder: Path, name: str, header: str) -> Path:
+def write_actor_policy(
+    state: dict, folder: Path, name: str, header: str, env: str | None = None
+) -> Path:
     """``folder/name.yaml`` (``header`` as its comment) and ``folder/name.pt`` from a training
-    checkpoint's ``state`` (its deployed actor); returns the YAML's path."""
+    checkpoint's ``state`` (its deployed actor); returns the YAML's path. ``env``: the env preset
+    it runs in (``configs/env/``), when not the default ``paper``."""
     import torch
 
     config = {key: state["config"][key] for key in CONFIG_KEYS}
@@ -83,7 +86,8 @@ def write_actor_policy(state: dict, folder: Path, name: str, header: str) -> Pat
     folder.mkdir(parents=True, exist_ok=True)
     torch.save(weights, folder / f"{name}.pt")
     comment = "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
-    body = yaml.safe_dump({"kind": "actor", "weights": f"{name}.pt"}, sort_keys=False)
+    data = {"kind": "actor", "weights": f"{name}.pt", **({"env": env} if env else {})}
+    body = yaml.safe_dump(data, sort_keys=False)
     path = folder / f"{name}.yaml"
     path.write_text(comment + body)
     return path
