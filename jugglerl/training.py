@@ -88,8 +88,12 @@ def prepare_run_folder(run_dir: Path, resuming: bool, overwrite: bool) -> None:
 def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
     """Run ``cfg``'s trainer in ``run_dir`` (resumed from ``state``), recording to its ``.rrd``;
     print the result, or on Ctrl-C how to continue."""
-    prepare_run_folder(run_dir, state is not None, bool(cfg.get("overwrite", False)))
-    training = trainer_class(cfg.algo.trainer)(cfg, run_dir, state)
+    training = trainer_class(cfg.algo.trainer)(cfg, run_dir, state)  # a bad config fails here
+    try:
+        prepare_run_folder(run_dir, state is not None, bool(cfg.get("overwrite", False)))
+    except ValueError:
+        training.close()
+        raise
     if state is not None:
         print(f"resuming {run_dir} at {training.position()}")
     try:
