@@ -80,9 +80,11 @@ import sys
 import torch
 from pathlib import Path
 from jugglerl.checkpoints import save_checkpoint
+from jugglerl.recording import logger as logger_module
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.run_files import RunFileError
 
+logger_module.FLUSH_TIMEOUT = 3.0  # the bound under test, shorter than a run's 30 s
 folder = Path(sys.argv[1])
 path = folder / "checkpoint.pt"
 save_checkpoint({"config": {}, "deploys": "actor", "weights": torch.zeros(1000)}, path)
