@@ -48,7 +48,6 @@ from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
-from jugglerl.policies import Policy
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.blueprint import training_blueprint
@@ -69,12 +68,14 @@ class OffPolicyTraining:
         check_config(cfg)
         self.cfg = cfg
         self.run_dir = Path(run_dir)
-        teacher = self._load_teacher()
-        if cfg.state.period == "teacher":  # resolved here, so checkpoints keep the number
-            if teacher is None:
-                raise ValueError("state.period=teacher needs a teacher.policy")
-            with make_juggle_env(cfg.env) as env:
-                cfg.state.period = teacher_period(teacher, env)
+        teacher = None
+        if cfg.teacher.policy is not None:
+            with make_juggle_env(cfg.env) as env:  # what the teacher reads, where it is timed
+                teacher = load_policy(str(cfg.teacher.policy), env)
+                if cfg.state.period == "teacher":  # resolved here: checkpoints keep the number
+                    cfg.state.period = teacher_period(teacher, env)
+        if cfg.state.period == "teacher":
+            raise ValueError("state.period=teacher needs a teacher.policy")
         torch.manual_seed(cfg.seed)
         start = initial_weights(cfg) if state is None and cfg.get("init_actor") else None
         norm = (state or start or {}).get("normalisation", {"loc": None, "scale": None})
@@ -113,13 +114,6 @@ class OffPolicyTraining:
         )
         self.noise = make_exploration(stage.cfg.exploration, self.env.action_spec)
         self.policy = TensorDictSequential(*self.teacher, self.actor, self.noise)
-
-    def _load_teacher(self) -> Policy | None:
-        """The policy ``teacher.policy`` names, to act in the loop (None without one)."""
-        if self.cfg.teacher.policy is None:
-            return None
-        with make_juggle_env(self.cfg.env) as template:  # what the policy reads of the env
-            return load_policy(str(self.cfg.teacher.policy), template)
 
     # --- the loop -------------------------------------------------------------------------
     def run(self, logger: RerunLogger, progress: bool = True) -> dict:

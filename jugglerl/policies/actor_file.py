@@ -39,15 +39,15 @@ def _weights_from_dict(data: dict, source: str) -> dict:
     return weights
 
 
-def check_gravity(config: dict, env, source: str) -> None:
-    """``PolicyFileError`` when ``env`` pulls otherwise than the env an actor learnt in: a
-    network does not carry over between gravities (an earth actor drops the ball at once at the
-    paper's -2 m/s²)."""
+def check_gravity(config: dict, env, source: str, preset: str | None = None) -> None:
+    """``PolicyFileError`` when ``env`` pulls otherwise than the env an actor learnt in (its
+    ``preset``, when its policy file names one): a network does not carry over between
+    gravities (an earth actor drops the ball at once at the paper's -2 m/s²)."""
     learnt, here = config["env"].get("gravity", -2.0), env.unwrapped.gravity
     if learnt != here:
-        preset = " (env=earth)" if learnt == -9.81 else ""
+        named = f" (env={preset})" if preset else ""
         raise PolicyFileError(
-            f"{source}: the actor learnt at env.gravity={learnt}{preset}; this env has {here}"
+            f"{source}: the actor learnt at env.gravity={learnt}{named}; this env has {here}"
         )
 
 
@@ -56,7 +56,7 @@ def actor_policy_from_dict(data: dict, source: str, env):
     from jugglerl.policies.actor import ActorPolicy
 
     weights = _weights_from_dict(data, source)
-    check_gravity(weights["config"], env, source)
+    check_gravity(weights["config"], env, source, data.get("env"))
     return ActorPolicy.from_state(weights)
 
 
