@@ -13,11 +13,13 @@ import importlib
 import sys
 from pathlib import Path
 
+from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
+from jugglerl.interrupts import stop_on_interrupt
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.run_files import METRICS, PARTIAL
+from jugglerl.run_files import METRICS, PARTIAL, write_atomically
 
 TRAINERS = {
     "offpolicy": "jugglerl.offpolicy.training:OffPolicyTraining",
@@ -85,16 +87,48 @@ def prepare_run_folder(run_dir: Path, resuming: bool, overwrite: bool) -> None:
         path.unlink(missing_ok=True)
 
 
+def save_hydra_record(run_dir: Path, cfg: DictConfig) -> None:
+    """Hydra's record of a new run in ``run_dir/.hydra``: ``config.yaml`` (the run's config),
+    ``hydra.yaml`` and ``overrides.yaml``. ``configs/train.yaml`` sets ``hydra.output_subdir:
+    null`` so that Hydra does not write them before the run folder is checked: a command refused
+    in another run's folder leaves that run's record as it was. Nothing outside Hydra's app."""
+    if not HydraConfig.initialized():
+        return
+    hydra = HydraConfig.get()
+    folder = run_dir / ".hydra"
+    folder.mkdir(parents=True, exist_ok=True)
+    records = {
+        "config.yaml": cfg,
+        "hydra.yaml": OmegaConf.create({"hydra": hydra}),
+        "overrides.yaml": hydra.overrides.task,
+    }
+    for name, content in records.items():
+        write_atomically(
+            folder / name, lambda file, c=content: file.write(OmegaConf.to_yaml(c).encode())
+        )
+
+
 def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
     """Run ``cfg``'s trainer in ``run_dir`` (resumed from ``state``), recording to its ``.rrd``;
-    print the result, or on Ctrl-C how to continue."""
-    training = trainer_class(cfg.algo.trainer)(cfg, run_dir, state)  # a bad config fails here
+    print the result, or on Ctrl-C how to continue. The first Ctrl-C stops the run, the later
+    ones are ignored while it saves and closes (``jugglerl.interrupts``)."""
+    with stop_on_interrupt():
+        try:
+            training = trainer_class(cfg.algo.trainer)(cfg, run_dir, state)  # a bad config fails
+        except KeyboardInterrupt:
+            sys.exit("interrupted while the run was being set up: nothing written")
+        _train(training, cfg, run_dir, state)
+
+
+def _train(training, cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
     try:
         prepare_run_folder(run_dir, state is not None, bool(cfg.get("overwrite", False)))
     except ValueError:
         training.close()
         raise
-    if state is not None:
+    if state is None:
+        save_hydra_record(run_dir, cfg)
+    else:
         print(f"resuming {run_dir} at {training.position()}")
     try:
         with RerunLogger.from_config(

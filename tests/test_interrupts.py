@@ -1,11 +1,12 @@
-"""``deferred_interrupt``: a Ctrl-C inside the block waits for its end; a second one does not."""
+"""``deferred_interrupt``: Ctrl-Cs inside the block wait for its end; ``stop_on_interrupt``: the
+first Ctrl-C stops, the later ones are ignored."""
 
 import os
 import signal
 
 import pytest
 
-from jugglerl.interrupts import deferred_interrupt
+from jugglerl.interrupts import deferred_interrupt, stop_on_interrupt
 
 
 def ctrl_c():
@@ -21,14 +22,37 @@ def test_a_ctrl_c_inside_the_block_is_raised_when_it_ends():
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
-def test_a_second_ctrl_c_is_raised_at_once():
+def test_two_ctrl_cs_inside_the_block_are_one_interrupt_when_it_ends():
     done = []
     with pytest.raises(KeyboardInterrupt), deferred_interrupt():
         ctrl_c()
         ctrl_c()
         done.append("after the second")
-    assert done == []
+    assert done == ["after the second"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_after_the_first_ctrl_c_of_a_run_the_others_are_ignored():
+    done = []
+    try:
+        with pytest.raises(KeyboardInterrupt), stop_on_interrupt():
+            with deferred_interrupt():
+                ctrl_c()
+                ctrl_c()
+                done.append("the updates finish")
+            done.append("not reached")
+        ctrl_c()  # while the run saves and exits
+        done.append("saved")
+        assert done == ["the updates finish", "saved"]
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def test_a_run_without_ctrl_c_leaves_the_handler_as_it_was():
+    with stop_on_interrupt():
+        value = 1
+    assert value == 1 and signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
 def test_a_block_without_ctrl_c_runs_and_leaves_the_handler_as_it_was():

@@ -80,11 +80,26 @@ def test_a_smoke_run_writes_a_checkpoint_that_resumes(tmp_path, overrides):
     assert list(times) == [384, 512, 512]
 
 
-def test_a_resumed_checkpoint_restores_networks_optimisers_and_exploration(tmp_path):
+def test_a_resumed_checkpoint_restores_networks_optimisers_exploration_and_clocks(
+    tmp_path, monkeypatch
+):
+    saved = []  # the state of every checkpoint the run writes
+    save = OffPolicyTraining.save
+
+    def save_and_keep(self):
+        save(self)
+        saved.append(self.state_dict())
+
+    monkeypatch.setattr(OffPolicyTraining, "save", save_and_keep)
     cfg = train_config(*TINY)
     _, training = train(cfg, tmp_path)
+    periodic = saved[0]  # at the first batch, while the run trains
+    assert periodic["counters"]["frames"] == 128 and periodic["counters"]["wall_seconds"] > 0
+    assert len(periodic["batch_stats"]["recent"]) == 1
     state = load_checkpoint(tmp_path)
     restored = OffPolicyTraining(cfg, tmp_path / "again", state)
+    assert list(restored.batch_stats.recent) == list(training.batch_stats.recent)
+    assert len(restored.batch_stats.recent) == 2
     for key, value in training.update.loss.state_dict().items():
         torch.testing.assert_close(restored.update.loss.state_dict()[key], value)
     saved_optimiser = training.update.critic_optimiser.state_dict()["state"]
@@ -165,6 +180,8 @@ def test_train_script_trains_td3_resumes_and_evaluate_runs_its_run_directory(tmp
     metrics = json.loads((tmp_path / "eval" / "metrics.json").read_text())
     assert 0 < metrics["duration"] <= 3
 
+    record = (tmp_path / ".hydra" / "overrides.yaml").read_text()
+    assert "algo=td3" in record
     again = run_train(*TINY, f"hydra.run.dir={tmp_path}")  # a new run over the finished one
     assert again.returncode == 1 and again.stderr.strip() == (
         f"error: {tmp_path} holds another run (checkpoint.pt, metrics.json): continue it with"
@@ -172,11 +189,13 @@ def test_train_script_trains_td3_resumes_and_evaluate_runs_its_run_directory(tmp
         " it (overwrite=true)"
     )
     assert json.loads((tmp_path / "metrics.json").read_text())["frames"] == 384  # untouched
+    assert (tmp_path / ".hydra" / "overrides.yaml").read_text() == record
 
 
-def test_ctrl_c_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
+def test_ctrl_c_twice_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
+    """The second press, 20 ms after the first, lands while the run saves: it is ignored."""
     returncode, stderr = interrupt_train(
-        tmp_path, *TINY, "collector.total_frames=1000000", "eval.every_frames=0"
+        tmp_path, *TINY, "collector.total_frames=1000000", "eval.every_frames=0", presses=2
     )
     assert returncode != 0
     assert "interrupted at frame" in stderr and f"resume={tmp_path}" in stderr

@@ -91,18 +91,19 @@ def test_who_acts_and_the_noise_are_the_centred_gaussian_they_stand_for():
     assert (dagger.cfg.exploration.expert_weight_end, dagger.cfg.exploration.sigma_end) == (0, 0)
 
 
-def test_a_resume_says_which_stages_lose_their_demonstrations():
+def test_a_resume_says_what_it_goes_without():
     drawing = "algo.rl_stage.demo_fraction=0.25"
     stages = stages_from_config(
         train_config("algo=apprentice", "collector.total_frames=491520", drawing)
     )
-    note = resume_note(stages, 368640)  # after DAgger: the RL stage's demonstrations are gone
+    note = resume_note(stages, 368640, 600000)  # after DAgger: the RL stage's demos are gone
+    assert note.startswith("note: resumed without the replay buffer's 368640 frames")
     assert "stage bc collected before frame 368640" in note and "stage rl draws" in note
-    assert "before frame 100000" in resume_note(stages, 100000)  # part of BC's is gone
-    assert resume_note(stages, 0) is None  # a new run
-    assert resume_note(stages, 491520 - 1) is not None
+    assert "before frame 100000" in resume_note(stages, 100000, 600000)  # part of BC's is gone
+    assert "buffer's 600000 frames" in resume_note(stages, 700000, 600000)  # a full buffer
+    assert resume_note(stages, 0, 600000) is None  # a new run
     (alone,) = stages_from_config(train_config("algo=td3"))
-    assert resume_note([alone], 1024) is None  # no stage draws on demonstrations
+    assert "demonstrations" not in resume_note([alone], 1024, 600000)  # none drawn on
 
 
 def test_a_run_without_stages_is_one_stage_of_its_loss():

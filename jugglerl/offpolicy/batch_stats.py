@@ -23,6 +23,14 @@ class BatchStats:
         self.step_seconds = step_seconds
         self.recent: deque[tuple[float, float]] = deque(maxlen=window)  # (throws, minutes)
 
+    def state_dict(self) -> dict:
+        """The throw-rate window, which a resumed run goes on measuring over."""
+        return {"recent": list(self.recent)}
+
+    def load_state_dict(self, state: dict) -> None:
+        self.recent.clear()
+        self.recent.extend(tuple(entry) for entry in state["recent"])
+
     def __call__(self, batch: TensorDictBase) -> dict[str, float]:
         thrown = float((batch["next", "throws"] - batch["throws"]).clamp(min=0).sum())
         self.recent.append((thrown, batch.numel() * self.step_seconds / 60))

@@ -8,8 +8,10 @@ is the default) and a run directory, where it writes
 
 - ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
   the stage, its loss's networks, targets and optimisers, the normalisation, the exploration
-  state, RNG states, counters, history, config and the deployed actor (``policy``: what
-  ``scripts/evaluate.py policy=<run dir>`` runs); not the replay buffers (a resume refills them);
+  state, RNG states, counters, wall time, the throw-rate window, history, config and the
+  deployed actor (``policy``: what ``scripts/evaluate.py policy=<run dir>`` runs); not the
+  replay buffers nor the envs' running episodes (a resume refills the one and restarts the
+  other, and says so: ``resume_note``);
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
 
@@ -95,6 +97,7 @@ class OffPolicyTraining:
         self.frames = 0
         self.updates = 0
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
+        self._session_start: float | None = None  # while run() trains
         self.history: list[dict] = []  # one record per collected batch
         self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
         self.recording_id: str | None = None
@@ -102,7 +105,7 @@ class OffPolicyTraining:
         self._enter(first)
         if state is not None:
             self.load_state_dict(state)
-            note = resume_note(self.stages, self.frames)
+            note = resume_note(self.stages, self.frames, self.cfg.replay_buffer.size)
             if note:
                 print(note, file=sys.stderr)
 
@@ -125,15 +128,15 @@ class OffPolicyTraining:
         bar = tqdm(
             total=collect.total_frames, initial=self.frames, unit="frame", disable=not progress
         )
-        started = time.monotonic()
+        self._session_start = time.monotonic()
         try:
             with bar:
                 self._train(logger, bar)
         except KeyboardInterrupt:
-            self.wall_seconds += time.monotonic() - started
             self.save()
             raise
-        self.wall_seconds += time.monotonic() - started
+        self.wall_seconds = self.wall_time()
+        self._session_start = None
         final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor())
         if self.evaluations.best is not None:
             final["policy_frames"] = self.evaluations.best["frames"]
@@ -251,6 +254,11 @@ class OffPolicyTraining:
             f" average over {len(final['episodes'])} episodes of {final['duration']:g} s"
         )
 
+    def wall_time(self) -> float:
+        """Seconds of training so far, this session's included."""
+        running = 0.0 if self._session_start is None else time.monotonic() - self._session_start
+        return self.wall_seconds + running
+
     # --- evaluation -----------------------------------------------------------------------
     def current_actor(self):
         """The actor as trained so far: the target (Polyak-averaged) actor with
@@ -292,8 +300,9 @@ class OffPolicyTraining:
             "counters": {
                 "frames": self.frames,
                 "updates": self.updates,
-                "wall_seconds": self.wall_seconds,
+                "wall_seconds": self.wall_time(),
             },
+            "batch_stats": self.batch_stats.state_dict(),
             "history": self.history,
             **self.evaluations.state_dict(),
             "recording_id": self.recording_id,
@@ -309,6 +318,7 @@ class OffPolicyTraining:
         self.updates = state["counters"]["updates"]
         self.wall_seconds = state["counters"]["wall_seconds"]
         self.history = list(state["history"])
+        self.batch_stats.load_state_dict(state.get("batch_stats", {"recent": []}))
         self.evaluations.load_state_dict(state)
         self.recording_id = state["recording_id"]
 
