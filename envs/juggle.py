@@ -1,4 +1,4 @@
-"""The juggling environment: a UR5e with a cone cup throws and catches one ball.
+"""The juggling environment: a UR5e with a cone cup throws and catches one ball, or ``balls``.
 
 Gymnasium id ``JuggleRL/Juggle-v0`` (registered by ``import jugglerl`` or ``import jugglerl_envs``).
 Its defaults are the paper preset (gravity -2 m/s², the authors' code); see ``configs/env/``.
@@ -27,7 +27,11 @@ The speed limit and servo gain apply to it too. An action of the wrong length is
 | 15-17 | cup velocity | m/s |
 | 18-19 | ``wrist_1_actuated`` only: its angle (rad) and velocity (rad/s) | |
 
-The fourth joint's values come last, so every index above means the same in both envs.
+| 18-23 (20-25), ... | ``balls`` > 1: each further ball's position and velocity | m, m/s |
+
+The fourth joint's values come after the 18, and the further balls' after those, so every index
+above means the same in every env (the further balls start at 20 with ``wrist_1_actuated``);
+indices 6-11 are always the first ball.
 
 Cup position and velocity come from the kinematics of the last physics step (MuJoCo computes them
 before integrating), 2 ms older than the joint and ball states at the default timestep.
@@ -40,27 +44,34 @@ reward 1, the DPS objective), ``distance`` (``min(1, 0.05 m / cup-ball distance)
 ## Start state
 Arm at ``home`` (pan, lift, elbow) with the wrist at ``wrist_angles``, at rest; the ball at rest
 ``drop_height`` above the cup, offset horizontally by up to ``reset_noise`` metres (uniform).
+With ``balls`` > 1 ball ``k`` starts ``k · ball_spacing`` higher still, offset the same way: the
+balls drop into the cup one after the other (``ball_spacing`` 2 m at g = -2: 0.9 s apart), so a
+pattern begins as the one-ball pattern does, with the next ball on its way. Balls pass through
+each other (``jugglerl_envs.scene``).
 
 ## Episode end
-Terminated when the ball falls below 0.1 m (dropped) or the physics goes bad (NaN, or any MuJoCo
+Terminated when a ball falls below 0.1 m (dropped) or the physics goes bad (NaN, or any MuJoCo
 warning: ``info["physics_error"]`` says which; the env never raises). Truncated after
 ``duration`` seconds of simulated time.
 
 ## Info
-``throws``, ``catches``, ``max_consecutive_catches`` (episode totals), ``ball_height`` (m),
-``in_cup`` (bool), episode maxima sampled every env step: ``max_cup_height`` (the cup's throat, m;
-a counted throw rose at least ``threshold`` minus this above the cup) and ``peak_joint_speed``
-(each actuated joint, rad/s; 3 or 4 values); ``time`` (s), ``kicks`` (so far), ``physics_error``
+``throws``, ``catches`` (episode totals over the balls), ``throws_per_ball`` (a tuple),
+``max_consecutive_catches`` (the longest streak of one ball), ``ball_height`` (m, the first
+ball), ``ball_heights`` (every ball), ``in_cup`` (bool, the first ball), episode maxima
+sampled every env step: ``max_cup_height`` (the cup's throat, m; a counted throw rose at least
+``threshold`` minus this above the cup) and ``peak_joint_speed`` (each actuated joint, rad/s;
+3 or 4 values); ``time`` (s), ``kicks`` (so far), ``physics_error``
 ("" if fine).
 
 ## Perturbations (for robustness tests; off by default, see ``jugglerl_envs.perturbations``)
 ``reset_noise`` (ball start offset), ``ball_mass``, ``ball_radius``, ``servo_gain`` (scales the
 arm servos' kp), ``kick_rate`` and ``kick_speed`` (random horizontal velocity kicks of the
-ball in free flight, per second and in m/s); imprecision: ``action_noise`` (std of Gaussian
-noise on every action, normalised units) with ``action_noise_correlation`` (s; 0 = white),
-``ball_noise`` (m, std of the observed ball position's noise; the observed ball velocity is then
-the difference of noisy positions over a step) and ``ball_latency`` (env steps the ball's
-observation arrives late). Throws and catches always count the true ball.
+ball in free flight, per second and in m/s; each ball its own); imprecision: ``action_noise``
+(std of Gaussian noise on every action, normalised units) with ``action_noise_correlation``
+(s; 0 = white), ``ball_noise`` (m, std of the observed ball position's noise; the observed
+ball velocity is then the difference of noisy positions over a step) and ``ball_latency`` (env
+steps the ball's observation arrives late; each ball tracked alike). Throws and catches always
+count the true balls.
 """
 
 from __future__ import annotations
@@ -83,8 +94,11 @@ DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
 MAX_RESET_NOISE = 0.05  # m: largest start offset of the ball (it must start above the cup)
 PAPER_HOME = (0.0, -1.5708, 2.15)  # rad: the paper preset (configs/env/paper.yaml)
 PAPER_WRIST = (-2.0, 1.5708, 0.0)
-#: Observation length with the paper's three actuators (two more with ``wrist_1_actuated``).
+#: Observation length with the paper's three actuators and one ball (two more with
+#: ``wrist_1_actuated``, ``BALL_SIZE`` more per further ball).
 OBSERVATION_SIZE = 18
+#: Observed values of a ball: its position and velocity.
+BALL_SIZE = 6
 
 
 class JuggleEnv(SceneMeasurements, MujocoEnv):
@@ -112,6 +126,8 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         ball_noise: float = 0.0,
         ball_latency: int = 0,
         drop_height: float = 0.5,
+        balls: int = 1,
+        ball_spacing: float = 2.0,
         home: tuple[float, float, float] = PAPER_HOME,
         wrist_angles: tuple[float, float, float] = PAPER_WRIST,
         wrist_1_actuated: bool = False,
@@ -146,6 +162,8 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self.ball_noise = check_number("ball_noise", ball_noise, 0.0, 0.1)
         self.ball_latency = check_number("ball_latency", ball_latency, 0, 50, integer=True)
         self.drop_height = check_number("drop_height", drop_height, 0.0, 2.0)
+        self.balls = check_number("balls", balls, 1, scene.MAX_BALLS, integer=True)
+        self.ball_spacing = check_number("ball_spacing", ball_spacing, 0.0, 10.0)
         self.home = np.array(check_vector("home", home, 3, -2 * math.pi, 2 * math.pi))
         self.wrist_angles = np.array(
             check_vector("wrist_angles", wrist_angles, 3, -2 * math.pi, 2 * math.pi)
@@ -160,7 +178,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
 
         self.metadata = {**self.metadata, "render_fps": round(1.0 / (timestep * frame_skip))}
-        size = OBSERVATION_SIZE + 2 * wrist_1_actuated
+        size = OBSERVATION_SIZE + 2 * wrist_1_actuated + BALL_SIZE * (self.balls - 1)
         observation_space = spaces.Box(-np.inf, np.inf, shape=(size,), dtype=np.float64)
         super().__init__(
             scene.scene_path(),
@@ -176,14 +194,18 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._action_noise = ActionNoise(
             self.action_noise, self.action_noise_correlation, self.dt, self._servos
         )
-        self._tracker = BallTracker(self.ball_noise, self.ball_latency, self.dt)
-        self._events = JuggleEvents(self.threshold)
+        self._trackers = [
+            BallTracker(self.ball_noise, self.ball_latency, self.dt) for _ in range(self.balls)
+        ]
+        self._events = [JuggleEvents(self.threshold) for _ in range(self.balls)]
         self._steps = 0
         self._max_steps = max(1, round(self.duration / self.dt))
 
     # --- set-up -----------------------------------------------------------------------------
     def _initialize_simulation(self):
-        model = scene.load_model(self.gravity, self.timestep, self.ball_radius, self.ball_mass)
+        model = scene.load_model(
+            self.gravity, self.timestep, self.ball_radius, self.ball_mass, self.balls
+        )
         scale_servo_gains(model, slice(0, len(self.actuated_joints)), self.servo_gain)
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
@@ -213,10 +235,12 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self.data.qvel[:] = 0.0
         self.data.ctrl[:] = qpos[self._arm_qpos]
         mujoco.mj_forward(self.model, self.data)
-        offset = self.np_random.uniform(-self.reset_noise, self.reset_noise, size=2)
-        start = self.data.site_xpos[self._cup_site] + np.array([*offset, self.drop_height])
-        self.data.qpos[self._ball_qpos : self._ball_qpos + 3] = start
-        self.data.qpos[self._ball_qpos + 3 : self._ball_qpos + 7] = (1.0, 0.0, 0.0, 0.0)
+        cup = self.data.site_xpos[self._cup_site].copy()
+        for ball, address in enumerate(self._balls_qpos):
+            offset = self.np_random.uniform(-self.reset_noise, self.reset_noise, size=2)
+            height = self.drop_height + ball * self.ball_spacing
+            self.data.qpos[address : address + 3] = cup + np.array([*offset, height])
+            self.data.qpos[address + 3 : address + 7] = (1.0, 0.0, 0.0, 0.0)
         mujoco.mj_forward(self.model, self.data)
 
         self._steps = 0
@@ -224,8 +248,9 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._setpoint = self.data.ctrl[: self._servos].copy()
         self._peak_joint_speed = np.zeros(self._servos)
         self._max_cup_height = float(self.cup_position()[2])
-        self._measure_ball_in_cup()
-        self._events.reset(self._ball_height(), self._clear_of_cup)
+        for ball, events in enumerate(self._events):
+            _, clear_of_cup = self._ball_in_cup(ball)
+            events.reset(self._ball_height(ball), clear_of_cup)
         self._physics_error = ""
         self._action_noise.reset(self.np_random)
         return self._get_obs(reset=True)
@@ -248,19 +273,22 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._kick_ball()
         self._physics_error = self._check_physics()
 
-        height = self._ball_height()
-        self._measure_ball_in_cup()
-        below_cup = height < self.data.site_xpos[self._cup_site, 2]
-        throws = self._events.update(
-            height, self._ball_in_flight(), self._in_cup, self._clear_of_cup, below_cup
-        )
+        throws = 0
+        for ball, events in enumerate(self._events):
+            height = self._ball_height(ball)
+            in_cup, clear_of_cup = self._ball_in_cup(ball)
+            below_cup = height < self.data.site_xpos[self._cup_site, 2]
+            throws += events.update(
+                height, self._ball_in_flight(ball), in_cup, clear_of_cup, below_cup
+            )
         speeds = np.abs(self.data.qvel[self._arm_qvel])
         self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
         self._max_cup_height = max(self._max_cup_height, float(self.cup_position()[2]))
 
         obs = self._get_obs()
         reward = self._reward(self, throws)
-        terminated = bool(self._physics_error) or height < DROP_HEIGHT
+        dropped = min(self._ball_height(ball) for ball in range(self.balls)) < DROP_HEIGHT
+        terminated = bool(self._physics_error) or dropped
         truncated = self._steps >= self._max_steps and not terminated
         if self.render_mode == "human":
             self.render()
@@ -285,43 +313,59 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         return self._kicks.active
 
     def _kick_ball(self) -> None:
-        """Maybe kick the ball, if it is in free flight (``kick_rate``, ``kick_speed``)."""
-        if not self._kicks.active or not self._ball_in_flight():
+        """Maybe kick each ball in free flight (``kick_rate``, ``kick_speed``)."""
+        if not self._kicks.active:
             return
-        kick = self._kicks.draw(self.np_random, self.dt)
-        if kick is not None:
-            self.data.qvel[self._ball_qvel : self._ball_qvel + 3] += kick
-            self._kick_count += 1
+        for ball in range(self.balls):
+            if not self._ball_in_flight(ball):
+                continue
+            kick = self._kicks.draw(self.np_random, self.dt)
+            if kick is not None:
+                self.ball_velocity(ball)[:] += kick
+                self._kick_count += 1
 
     def _get_obs(self, reset: bool = False) -> np.ndarray:
         observation = self._true_obs()
-        if self._tracker.active:  # the policy sees a tracked ball; the events use the true one
-            position, velocity = observation[6:9], observation[9:12]
-            track = self._tracker.reset if reset else self._tracker.observe
-            observation[6:12] = track(position, velocity, self.np_random)
+        if not self._trackers[0].active:  # the policy sees tracked balls; events the true ones
+            return observation
+        for ball, tracker in enumerate(self._trackers):
+            seen = self._ball_slice(ball)
+            track = tracker.reset if reset else tracker.observe
+            observation[seen] = track(observation[seen][:3], observation[seen][3:], self.np_random)
         return observation
+
+    def _ball_slice(self, ball: int) -> slice:
+        """Where ball ``ball``'s position and velocity sit in the observation."""
+        if ball == 0:
+            return slice(6, 12)
+        start = OBSERVATION_SIZE + 2 * self.wrist_1_actuated + BALL_SIZE * (ball - 1)
+        return slice(start, start + BALL_SIZE)
 
     def _true_obs(self) -> np.ndarray:
         d = self.data
         parts = [
             d.qpos[self._arm_qpos[:3]],
             d.qvel[self._arm_qvel[:3]],
-            d.qpos[self._ball_qpos : self._ball_qpos + 3],
-            d.qvel[self._ball_qvel : self._ball_qvel + 3],
+            self.ball_position(),
+            self.ball_velocity(),
             d.site_xpos[self._cup_site],
             self._cup_velocity(),
         ]
         if self.wrist_1_actuated:  # appended, so the indices above keep their meaning
             parts += [d.qpos[self._arm_qpos[3:4]], d.qvel[self._arm_qvel[3:4]]]
+        for ball in range(1, self.balls):  # and after those, the further balls
+            parts += [self.ball_position(ball), self.ball_velocity(ball)]
         return np.concatenate(parts)
 
     def _info(self) -> dict:
         return {
-            "throws": self._events.throws,
-            "catches": self._events.catches,
-            "max_consecutive_catches": self._events.max_streak,
+            "throws": sum(events.throws for events in self._events),
+            "throws_per_ball": tuple(events.throws for events in self._events),
+            "catches": sum(events.catches for events in self._events),
+            "max_consecutive_catches": max(events.max_streak for events in self._events),
             "ball_height": self._ball_height(),
-            "in_cup": bool(self._in_cup),
+            "ball_heights": tuple(self._ball_height(ball) for ball in range(self.balls)),
+            "in_cup": self._ball_in_cup()[0],
             "peak_joint_speed": self._peak_joint_speed.copy(),
             "max_cup_height": self._max_cup_height,
             "time": float(self.data.time),

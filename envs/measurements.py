@@ -1,8 +1,9 @@
 """``SceneMeasurements``: what the juggling env reads off its MuJoCo state after a step.
 
-The ball's height, position and contacts, the cup's position and velocity, whether the ball is in
+Each ball's height, position and contacts, the cup's position and velocity, whether a ball is in
 the cup, and whether the physics went bad. A mixin of ``JuggleEnv`` (it reads ``self.model``,
-``self.data`` and ``self.actuated_joints``); ``_cache_ids`` looks the scene's ids up once.
+``self.data``, ``self.actuated_joints`` and ``self.balls``); ``_cache_ids`` looks the scene's ids
+up once. The methods about a ball take its index, ``0`` (the first ball) by default.
 """
 
 from __future__ import annotations
@@ -20,12 +21,14 @@ class SceneMeasurements:
         m = self.model
         self._arm_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in scene.ARM_JOINTS])
         self._arm_qvel = np.array([m.jnt_dofadr[m.joint(j).id] for j in self.actuated_joints])
-        ball_joint = m.body(scene.BALL_BODY).jntadr[0]
-        self._ball_qpos = m.jnt_qposadr[ball_joint]
-        self._ball_qvel = m.jnt_dofadr[ball_joint]
+        joints = [m.body(scene.ball_name(ball)).jntadr[0] for ball in range(self.balls)]
+        self._balls_qpos = [int(m.jnt_qposadr[joint]) for joint in joints]
+        self._balls_qvel = [int(m.jnt_dofadr[joint]) for joint in joints]
         self._cup_site = m.site(scene.CUP_SITE).id
         self._ball_geom = m.geom(scene.BALL_GEOM).id
-        self._contact_sensor = m.sensor_adr[m.sensor(scene.BALL_CONTACT_SENSOR).id]
+        self._contact_sensors = [
+            m.sensor_adr[m.sensor(scene.ball_contact_sensor(ball)).id] for ball in range(self.balls)
+        ]
         arm_root = m.body(scene.ARM_ROOT_BODY).id
         arm_bodies = [b for b in range(m.nbody) if self._has_ancestor(b, arm_root)]
         self._arm_geoms = np.flatnonzero(np.isin(m.geom_bodyid, arm_bodies))
@@ -45,33 +48,29 @@ class SceneMeasurements:
             return f"non-finite state at t={self.data.time:.3f}s"
         return ""
 
-    def _ball_height(self) -> float:
-        return float(self.data.qpos[self._ball_qpos + 2])
+    def _ball_height(self, ball: int = 0) -> float:
+        return float(self.data.qpos[self._balls_qpos[ball] + 2])
 
-    def _ball_in_flight(self) -> bool:
-        return self.data.sensordata[self._contact_sensor] == 0
+    def _ball_in_flight(self, ball: int = 0) -> bool:
+        return self.data.sensordata[self._contact_sensors[ball]] == 0
 
-    def ball_in_cup_frame(self) -> tuple[float, float]:
+    def ball_in_cup_frame(self, ball: int = 0) -> tuple[float, float]:
         """Ball centre in the cup frame (m): (distance from the cone axis, height above throat)."""
-        offset = (
-            self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
-            - self.data.site_xpos[self._cup_site]
-        )
+        offset = self.ball_position(ball) - self.data.site_xpos[self._cup_site]
         local = self.data.site_xmat[self._cup_site].reshape(3, 3).T @ offset
         return math.hypot(local[0], local[1]), float(local[2])
 
-    def _measure_ball_in_cup(self) -> None:
-        """Set ``_in_cup`` (centre inside the cone, below the rim) and ``_clear_of_cup``.
+    def _ball_in_cup(self, ball: int = 0) -> tuple[bool, bool]:
+        """(in the cup: centre inside the cone, below the rim; clear of the cup).
 
         Clear means more than a ball radius outside the cone: a ball sloshing up to the rim is
         neither caught again nor counted as lost.
         """
-        radial, height = self.ball_in_cup_frame()
-        self._in_cup = 0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS
+        radial, height = self.ball_in_cup_frame(ball)
+        in_cup = 0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS
         margin = self.ball_radius
-        self._clear_of_cup = (
-            height > scene.CUP_DEPTH + margin or radial > scene.CUP_TOP_RADIUS + margin
-        )
+        clear = height > scene.CUP_DEPTH + margin or radial > scene.CUP_TOP_RADIUS + margin
+        return in_cup, clear
 
     def _cup_velocity(self) -> np.ndarray:
         mujoco.mj_objectVelocity(
@@ -87,9 +86,13 @@ class SceneMeasurements:
         other = np.where(geoms[:, 0] == self._ball_geom, geoms[:, 1], geoms[:, 0])
         return int(np.isin(other[with_ball], self._arm_geoms).sum())
 
-    def ball_position(self) -> np.ndarray:
+    def ball_position(self, ball: int = 0) -> np.ndarray:
         """The ball's centre (m, world frame)."""
-        return self.data.qpos[self._ball_qpos : self._ball_qpos + 3]
+        return self.data.qpos[self._balls_qpos[ball] : self._balls_qpos[ball] + 3]
+
+    def ball_velocity(self, ball: int = 0) -> np.ndarray:
+        """The ball's linear velocity (m/s, world frame)."""
+        return self.data.qvel[self._balls_qvel[ball] : self._balls_qvel[ball] + 3]
 
     def cup_position(self) -> np.ndarray:
         """The cup's throat (site ``cup``, m, world frame), from the last physics step."""

@@ -23,6 +23,7 @@ class EpisodeMetrics:
     physics_error: str = ""
     max_cup_height: float = 0.0  # m, the cup's throat at its highest
     peak_joint_speed: tuple[float, ...] = ()  # rad/s, per actuated joint
+    throws_per_ball: tuple[int, ...] = ()  # in the env's ball order; sums to ``throws``
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -60,6 +61,7 @@ def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episod
         physics_error=info["physics_error"],
         max_cup_height=round(info["max_cup_height"], 6),
         peak_joint_speed=tuple(round(float(v), 6) for v in info["peak_joint_speed"]),
+        throws_per_ball=tuple(int(n) for n in info["throws_per_ball"]),
     )
 
 

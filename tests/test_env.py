@@ -51,7 +51,7 @@ def test_observation_layout(hold):
     for _ in range(10):
         obs, *_ = env.step(hold(env))
     assert obs[11] < 0  # ball falling
-    np.testing.assert_allclose(obs[9:12], env.data.qvel[env._ball_qvel : env._ball_qvel + 3])
+    np.testing.assert_allclose(obs[9:12], env.ball_velocity())
 
 
 def test_reset_noise_offsets_the_ball_reproducibly_by_seed():

@@ -12,6 +12,11 @@ from jugglerl.state.observation_parts import observed_parts
 
 def check_config(cfg: DictConfig) -> None:
     """Raise ``ValueError`` naming the keys of a budget, buffer or evaluation that cannot work."""
+    if cfg.env.balls != 1:
+        raise ValueError(
+            f"env.balls={cfg.env.balls}: the networks' state observes one ball (jugglerl/state);"
+            " off-policy training runs with env.balls=1"
+        )
     collect = cfg.collector
     if collect.num_envs < 1:
         raise ValueError(f"collector.num_envs={collect.num_envs} must be >= 1")

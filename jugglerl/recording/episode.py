@@ -19,7 +19,7 @@ from jugglerl.recording.geometry import (
     relative_poses,
 )
 from jugglerl.recording.names import PLOTS, SIM_TIME, WORLD, join
-from jugglerl_envs.scene import CUP_SITE
+from jugglerl_envs.scene import CUP_SITE, ball_name
 
 THRESHOLD_COLOUR = [40, 160, 255]
 THROW_COLOUR = [255, 200, 0]
@@ -38,7 +38,8 @@ class EpisodeRecorder(gym.Wrapper):
     - ``world/...``: the static geometry once, then the moving bodies' transforms at
       ``scene_fps`` frames per simulated second (the ball at ``world/ball``), and the threshold as
       a square outline at its height;
-    - ``plots/ball_height`` every env step, ``plots/threshold`` as a line, ``plots/throws`` a
+    - ``plots/ball_height`` every env step (with several balls, ``plots/ball_1_height``, ... too,
+      in each ball's colour), ``plots/threshold`` as a line, ``plots/throws`` a
       marker at the height of each counted throw (the env's own count, ``info["throws"]``).
 
     All on the ``sim_time`` timeline. Samples are buffered and sent in columns (a log call per
@@ -105,6 +106,13 @@ class EpisodeRecorder(gym.Wrapper):
             rr.SeriesLines(colors=[HEIGHT_COLOUR], names=["ball height (m)"]),
             static=True,
         )
+        for ball in range(1, self.env.unwrapped.balls):
+            colour = self._model.geom(ball_name(ball)).rgba[:3]
+            self.stream.log(
+                join(self._plots, _height_series(ball)),
+                rr.SeriesLines(colors=[colour], names=[f"ball {ball} height (m)"]),
+                static=True,
+            )
         self.stream.log(
             join(self._plots, "threshold"),
             rr.SeriesLines(colors=[THRESHOLD_COLOUR], names=["threshold"]),
@@ -142,7 +150,7 @@ class EpisodeRecorder(gym.Wrapper):
     def _sample(self, info: dict) -> None:
         time = info["time"]
         self._times.append(time)
-        self._heights.append(info["ball_height"])
+        self._heights.append(info["ball_heights"])
         if info["throws"] > self._throws:
             self._throws = info["throws"]
             self._throw_times.append(time)
@@ -165,7 +173,8 @@ class EpisodeRecorder(gym.Wrapper):
         """Send the buffered samples as columns and empty the buffers."""
         if not self._recording or not self._times:
             return
-        self._send_scalars("ball_height", self._times, self._heights)
+        for ball, heights in enumerate(zip(*self._heights, strict=True)):
+            self._send_scalars(_height_series(ball), self._times, list(heights))
         ends = [self._times[0], self._times[-1]]
         self._send_scalars("threshold", ends, [self._threshold] * 2)
         if self._throw_times:
@@ -213,3 +222,8 @@ def record_episode(
         return run_episode(recorder, policy, seed=seed)
     finally:
         recorder.close()
+
+
+def _height_series(ball: int) -> str:
+    """The plot of ball ``ball``'s height: ``ball_height`` for the first, as with one ball."""
+    return "ball_height" if ball == 0 else f"{ball_name(ball)}_height"
