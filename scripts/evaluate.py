@@ -35,6 +35,7 @@ def main(cfg: DictConfig) -> None:
     try:
         check_override_types()
         env = make_juggle_env(cfg.env, duration=cfg.duration)
+        cfg.env.duration = env.unwrapped.duration  # the recorded config: the episode's length
         policy = load_policy(str(cfg.policy), env)
         if cfg.video:
             env = VideoRecorder(env, run_dir / str(cfg.render.file), **render_options(cfg.render))

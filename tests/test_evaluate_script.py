@@ -3,7 +3,10 @@
 import json
 import subprocess
 
+import yaml
 from cli import run_script
+
+from jugglerl.recording.reading import column
 
 
 def run_evaluate(*overrides: str) -> subprocess.CompletedProcess:
@@ -25,6 +28,9 @@ def test_evaluate_writes_metrics_json_in_the_run_dir(tmp_path):
     assert metrics["duration"] == 10.0 and metrics["seed"] == 2 and metrics["time_to_drop"] is None
     assert metrics["throws"] >= 2
     assert f"{metrics['throws']} throws" in result.stdout
+    document = column(tmp_path / "episode.rrd", "hparams", "TextDocument:text")[1][0]
+    config = yaml.safe_load(document.strip().removeprefix("```yaml").removesuffix("```"))
+    assert config["env"]["duration"] == 10.0  # the recording's config says what was run
 
 
 def test_evaluate_replays_a_command_file(tmp_path):
