@@ -91,7 +91,8 @@ def save_hydra_record(run_dir: Path, cfg: DictConfig) -> None:
     """Hydra's record of a new run in ``run_dir/.hydra``: ``config.yaml`` (the run's config),
     ``hydra.yaml`` and ``overrides.yaml``. ``configs/train.yaml`` sets ``hydra.output_subdir:
     null`` so that Hydra does not write them before the run folder is checked: a command refused
-    in another run's folder leaves that run's record as it was. Nothing outside Hydra's app."""
+    in another run's folder leaves that run's record as it was. Called outside a Hydra app (a
+    test calling ``train``), it writes nothing."""
     if not HydraConfig.initialized():
         return
     hydra = HydraConfig.get()
@@ -121,6 +122,7 @@ def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
 
 
 def _train(training, cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
+    """``train`` once its trainer is built: the folder checked and prepared, the run recorded."""
     try:
         prepare_run_folder(run_dir, state is not None, bool(cfg.get("overwrite", False)))
     except ValueError:
