@@ -248,9 +248,9 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._setpoint = self.data.ctrl[: self._servos].copy()
         self._peak_joint_speed = np.zeros(self._servos)
         self._max_cup_height = float(self.cup_position()[2])
+        self._measure_balls()
         for ball, events in enumerate(self._events):
-            _, clear_of_cup = self._ball_in_cup(ball)
-            events.reset(self._ball_height(ball), clear_of_cup)
+            events.reset(self._heights[ball], self._clear_of_cup[ball])
         self._physics_error = ""
         self._action_noise.reset(self.np_random)
         return self._get_obs(reset=True)
@@ -273,13 +273,17 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._kick_ball()
         self._physics_error = self._check_physics()
 
+        self._measure_balls()
+        cup_height = self.data.site_xpos[self._cup_site, 2]
         throws = 0
         for ball, events in enumerate(self._events):
-            height = self._ball_height(ball)
-            in_cup, clear_of_cup = self._ball_in_cup(ball)
-            below_cup = height < self.data.site_xpos[self._cup_site, 2]
+            height = self._heights[ball]
             throws += events.update(
-                height, self._ball_in_flight(ball), in_cup, clear_of_cup, below_cup
+                height,
+                self._ball_in_flight(ball),
+                self._in_cup[ball],
+                self._clear_of_cup[ball],
+                height < cup_height,
             )
         speeds = np.abs(self.data.qvel[self._arm_qvel])
         self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
@@ -287,8 +291,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
 
         obs = self._get_obs()
         reward = self._reward(self, throws)
-        dropped = min(self._ball_height(ball) for ball in range(self.balls)) < DROP_HEIGHT
-        terminated = bool(self._physics_error) or dropped
+        terminated = bool(self._physics_error) or min(self._heights) < DROP_HEIGHT
         truncated = self._steps >= self._max_steps and not terminated
         if self.render_mode == "human":
             self.render()
@@ -363,9 +366,9 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             "throws_per_ball": tuple(events.throws for events in self._events),
             "catches": sum(events.catches for events in self._events),
             "max_consecutive_catches": max(events.max_streak for events in self._events),
-            "ball_height": self._ball_height(),
-            "ball_heights": tuple(self._ball_height(ball) for ball in range(self.balls)),
-            "in_cup": self._ball_in_cup()[0],
+            "ball_height": self._heights[0],
+            "ball_heights": tuple(self._heights),
+            "in_cup": self._in_cup[0],
             "peak_joint_speed": self._peak_joint_speed.copy(),
             "max_cup_height": self._max_cup_height,
             "time": float(self.data.time),

@@ -60,17 +60,22 @@ class SceneMeasurements:
         local = self.data.site_xmat[self._cup_site].reshape(3, 3).T @ offset
         return math.hypot(local[0], local[1]), float(local[2])
 
-    def _ball_in_cup(self, ball: int = 0) -> tuple[bool, bool]:
-        """(in the cup: centre inside the cone, below the rim; clear of the cup).
+    def _measure_balls(self) -> None:
+        """Set, per ball, ``_heights``, ``_in_cup`` (centre inside the cone, below the rim) and
+        ``_clear_of_cup``: what a step's events, episode end and info read.
 
         Clear means more than a ball radius outside the cone: a ball sloshing up to the rim is
         neither caught again nor counted as lost.
         """
-        radial, height = self.ball_in_cup_frame(ball)
-        in_cup = 0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS
-        margin = self.ball_radius
-        clear = height > scene.CUP_DEPTH + margin or radial > scene.CUP_TOP_RADIUS + margin
-        return in_cup, clear
+        self._heights = [self._ball_height(ball) for ball in range(self.balls)]
+        self._in_cup, self._clear_of_cup = [], []
+        for ball in range(self.balls):
+            radial, height = self.ball_in_cup_frame(ball)
+            self._in_cup.append(0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS)
+            margin = self.ball_radius
+            self._clear_of_cup.append(
+                height > scene.CUP_DEPTH + margin or radial > scene.CUP_TOP_RADIUS + margin
+            )
 
     def _cup_velocity(self) -> np.ndarray:
         mujoco.mj_objectVelocity(
