@@ -1,53 +1,22 @@
 """``JuggleEnv(balls=N)``: one ball plays back as before; with two, either ball's throw counts
 once, a dropped ball ends the episode, and the observation is laid out as the env documents."""
 
-from pathlib import Path
-
-import gymnasium as gym
 import numpy as np
 import pytest
+from closed_loop_episode import RECORDED, play
 
 import jugglerl  # noqa: F401  (registers the id)
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.loading import load_policy
-from jugglerl_envs import ENV_ID, JuggleEnv
-
-RECORDED = Path(__file__).with_name("data") / "closed_loop_30s.npz"
+from jugglerl_envs import JuggleEnv
 
 
 def test_one_ball_plays_back_the_episode_recorded_before_the_env_took_balls():
     recorded = np.load(RECORDED)
-    env = gym.make(
-        ENV_ID,
-        duration=30.0,
-        reward="juggle",
-        reset_noise=0.01,
-        ball_noise=0.001,
-        kick_rate=0.5,
-        kick_speed=0.02,
-        balls=1,
-    )
-    policy = load_policy("closed_loop", env.unwrapped)
-    observation, info = env.reset(seed=0)
-    policy.reset()
-    played = {key: [] for key in ("reward", "terminated", "truncated", "throws", "catches")}
-    observations = [observation]
-    done = False
-    while not done:
-        observation, reward, terminated, truncated, info = env.step(
-            policy.act(observation, info["time"])
-        )
-        observations.append(observation)
-        for key, value in zip(
-            played, (reward, terminated, truncated, info["throws"], info["catches"]), strict=True
-        ):
-            played[key].append(value)
-        done = terminated or truncated
-    np.testing.assert_array_equal(np.array(observations), recorded["observation"])
+    played, info = play(balls=1)
     for key, values in played.items():
-        np.testing.assert_array_equal(np.array(values), recorded[key], err_msg=key)
+        np.testing.assert_array_equal(values, recorded[key], err_msg=key)
     assert info["throws_per_ball"] == (info["throws"],) == (14,)
-    env.close()
 
 
 def hold_arm(env: JuggleEnv) -> np.ndarray:
