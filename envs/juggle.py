@@ -332,12 +332,12 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         if not self._trackers[0].active:  # the policy sees tracked balls; events the true ones
             return observation
         for ball, tracker in enumerate(self._trackers):
-            seen = self._ball_slice(ball)
+            seen = self.ball_slice(ball)
             track = tracker.reset if reset else tracker.observe
             observation[seen] = track(observation[seen][:3], observation[seen][3:], self.np_random)
         return observation
 
-    def _ball_slice(self, ball: int) -> slice:
+    def ball_slice(self, ball: int) -> slice:
         """Where ball ``ball``'s position and velocity sit in the observation."""
         if ball == 0:
             return slice(6, 12)

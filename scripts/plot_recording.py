@@ -3,9 +3,10 @@
     python scripts/plot_recording.py outputs/evaluate/<run>/episode.rrd [--out plot.png]
         [--root ""] [--seconds 30]
 
-Reads ``<root>/plots/ball_height``, ``threshold`` and ``throws`` back from the ``.rrd`` with
-rerun's reader and draws them as the viewer's plot does (red height, blue threshold, yellow
-throw markers) over the first ``--seconds`` of simulated time. Prints what it read.
+Reads ``<root>/plots/ball_height`` (and, from an episode of several balls, ``ball_1_height``, ...),
+``threshold`` and ``throws`` back from the ``.rrd`` with rerun's reader and draws them as the
+viewer's plot does (red height, further balls in their colours, blue threshold, yellow throw
+markers) over the first ``--seconds`` of simulated time. Prints what it read.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from jugglerl.recording.episode import HEIGHT_COLOUR, THRESHOLD_COLOUR, THROW_COLOUR
 from jugglerl.recording.names import PLOTS, SIM_TIME, join
 from jugglerl.recording.reading import column
+from jugglerl_envs.scene import EXTRA_BALL_COLOURS, ball_name
 
 WIDTH, HEIGHT, MARGIN = 900, 300, 20
 
@@ -29,6 +31,20 @@ def read_series(path: Path, entity: str) -> tuple[np.ndarray, np.ndarray]:
     if not len(times):
         raise SystemExit(f"error: no scalar series at {entity!r} in {path}")
     return times, values
+
+
+def ball_heights(path: Path, plots: str) -> list[tuple[np.ndarray, np.ndarray, list[int], str]]:
+    """Each recorded ball's height series, drawn as a line in its colour (the first in red)."""
+    series = [(*read_series(path, join(plots, "ball_height")), HEIGHT_COLOUR, "line")]
+    for ball, rgba in enumerate(EXTRA_BALL_COLOURS, start=1):
+        times, values = column(
+            path, join(plots, f"{ball_name(ball)}_height"), "Scalars:scalars", SIM_TIME
+        )
+        if not len(times):
+            break
+        colour = [round(255 * float(c)) for c in rgba.split()[:3]]
+        series.append((times, values, colour, "line"))
+    return series
 
 
 def draw(series: list[tuple[np.ndarray, np.ndarray, list[int], str]], seconds: float) -> np.ndarray:
@@ -71,14 +87,14 @@ def main() -> None:
         raise SystemExit(f"error: no recording at {args.recording}")
 
     plots = join(args.root, PLOTS)
-    height = read_series(args.recording, join(plots, "ball_height"))
+    heights = ball_heights(args.recording, plots)
     threshold = read_series(args.recording, join(plots, "threshold"))
     threshold = (np.array([0.0, args.seconds]), threshold[1][:2])
     throws = read_series(args.recording, join(plots, "throws"))
     image = draw(
         [
             (*threshold, THRESHOLD_COLOUR, "line"),
-            (*height, HEIGHT_COLOUR, "line"),
+            *heights,
             (*throws, THROW_COLOUR, "marker"),
         ],
         args.seconds,
@@ -87,8 +103,8 @@ def main() -> None:
     iio.imwrite(out, image)
     shown = int((throws[0] <= args.seconds).sum())
     print(
-        f"{len(height[0])} heights, {len(throws[0])} throws ({shown} in the first "
-        f"{args.seconds:g} s) -> {out}"
+        f"{len(heights)} ball(s), {len(heights[0][0])} heights each, {len(throws[0])} throws"
+        f" ({shown} in the first {args.seconds:g} s) -> {out}"
     )
 
 

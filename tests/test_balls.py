@@ -6,7 +6,9 @@ import pytest
 from closed_loop_episode import RECORDED, play
 
 import jugglerl  # noqa: F401  (registers the id)
+from jugglerl.commands import CommandError, load_command
 from jugglerl.evaluation import run_episode
+from jugglerl.policies.feedback import LOCK_HEIGHT, FeedbackGains, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
 
@@ -75,3 +77,52 @@ def test_an_episode_of_two_balls_reports_throws_per_ball():
     assert sum(metrics.throws_per_ball) == metrics.throws
     assert len(metrics.throws_per_ball) == 2
     env.close()
+
+
+def two_balls_seen(first: float, second: float, second_x: float = 0.0) -> np.ndarray:
+    """An observation of a two-ball env: the cup at rest at (0, 0, 0.8), the first ball ``first``
+    above it and the second ``second`` above it (``second_x`` along x), both falling at 1 m/s."""
+    observation = np.zeros(24)
+    observation[12:15] = (0.0, 0.0, 0.8)
+    for start, x, height in ((6, 0.0, first), (18, second_x, second)):
+        observation[start : start + 3] = (x, 0.0, 0.8 + height)
+        observation[start + 5] = -1.0
+    return observation
+
+
+def test_with_two_balls_each_one_locks_the_phase_as_it_comes_down():
+    env = JuggleEnv(balls=2)
+    policy = FeedbackPolicy(load_command("dps_best"), FeedbackGains(0.6, 1, 0, 1, 0, 0), env)
+    policy.reset()
+    policy.act(two_balls_seen(0.5, 1.5), 1.0)
+    policy.act(two_balls_seen(LOCK_HEIGHT, 1.5), 1.02)  # the first ball locks
+    assert policy.phase == pytest.approx(0.6)
+    policy.act(two_balls_seen(0.0, 0.5), 2.0)
+    policy.act(two_balls_seen(0.0, LOCK_HEIGHT), 2.02)  # then the second; the first, held, not
+    assert policy.phase == pytest.approx(0.6)
+    policy.act(two_balls_seen(0.0, LOCK_HEIGHT - 0.02), 2.04)  # each locks once per fall
+    assert policy.phase == pytest.approx(0.6 + env.dt)
+
+
+def test_with_two_balls_the_cup_tracks_the_next_landing_only_while_it_holds_none():
+    env = JuggleEnv(balls=2)
+    gains = FeedbackGains(0.6, 0.0, 0.5, 0.5, 0.0, 0.0)
+    policy = FeedbackPolicy(load_command("dps_best"), gains, env)
+    policy.reset()
+    policy.act(two_balls_seen(0.05, 0.6, second_x=0.04), 0.0)  # one held: no tracking
+    np.testing.assert_array_equal(policy.offset, [0.0, 0.0])
+    policy.act(two_balls_seen(1.0, 0.6, second_x=0.04), 0.02)  # thrown: track the other
+    assert policy.offset[0] > 0.01 and policy.offset[1] == 0.0
+
+
+def test_the_shipped_two_ball_juggler_keeps_both_balls_up():
+    env = JuggleEnv(balls=2, duration=30.0)
+    policy = load_policy("two_balls", env)
+    assert isinstance(policy, FeedbackPolicy)
+    metrics = run_episode(env, policy, seed=0)
+    assert metrics.time_to_drop is None and min(metrics.throws_per_ball) >= 8
+    env.close()
+    with pytest.raises(
+        CommandError, match="juggles balls=2 but the env has 1: run it with env.balls=2"
+    ):
+        load_policy("two_balls", JuggleEnv())

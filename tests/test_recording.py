@@ -163,9 +163,11 @@ def end(process: subprocess.Popen, grace: float = 10.0) -> None:
 
 
 # --- EpisodeRecorder -----------------------------------------------------------------------
-def record_expert(tmp_path: Path, duration: float, scene_fps: float = 50.0, root: str = ""):
+def record_expert(
+    tmp_path: Path, duration: float, scene_fps: float = 50.0, root: str = "", balls: int = 1
+):
     """Record the expert; return the logger path, the metrics and the true ball trajectory."""
-    env = JuggleEnv(duration=duration)
+    env = JuggleEnv(duration=duration, balls=balls)
     trajectory = []
 
     class Tracing(CommandPolicy):
@@ -261,8 +263,28 @@ def test_plot_recording_draws_the_ball_height_from_a_file(tmp_path):
         text=True,
     )
     assert result.returncode == 0, result.stderr
-    assert f"401 heights, {metrics.throws} throws" in result.stdout
+    assert f"1 ball(s), 401 heights each, {metrics.throws} throws" in result.stdout
     image = iio.imread(out)
     assert image.shape == (300, 900, 3)
     red = (image == [230, 60, 60]).all(axis=-1)  # the height line is drawn
     assert red.sum() > 500
+
+
+def test_a_two_ball_recording_plots_each_balls_height_in_its_colour(tmp_path):
+    path, _, _ = record_expert(tmp_path, duration=3.0, balls=2)
+    first = column(path, "plots/ball_height", "Scalars:scalars", "sim_time")
+    second = column(path, "plots/ball_1_height", "Scalars:scalars", "sim_time")
+    np.testing.assert_array_equal(first[0], second[0])
+    assert (second[1][:10] > first[1][:10] + 1.5).all()  # the second starts 2 m higher
+    out = tmp_path / "plot.png"
+    script = Path(__file__).resolve().parents[1] / "scripts" / "plot_recording.py"
+    result = subprocess.run(
+        [sys.executable, str(script), str(path), "--out", str(out), "--seconds", "3"],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "2 ball(s), 151 heights each" in result.stdout
+    image = iio.imread(out)
+    blue = (image == [26, 76, 230]).all(axis=-1)  # the second ball's colour (scene.py)
+    assert blue.sum() > 200

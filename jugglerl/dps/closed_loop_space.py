@@ -18,6 +18,7 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
 from jugglerl.policies.feedback import (
+    MAX_OFFSET,
     PARAM_NAMES,
     FeedbackGains,
     FeedbackPolicy,
@@ -27,9 +28,9 @@ from jugglerl.policies.feedback import (
 BEST_POLICY = "best_policy.yaml"
 
 
-def gains_from_params(params: torch.Tensor) -> FeedbackGains:
-    """θ (``PARAM_NAMES`` order) as ``FeedbackGains``."""
-    return FeedbackGains(*(float(value) for value in params))
+def gains_from_params(params: torch.Tensor, max_offset: float = MAX_OFFSET) -> FeedbackGains:
+    """θ (``PARAM_NAMES`` order) as ``FeedbackGains`` steering the cup up to ``max_offset``."""
+    return FeedbackGains(*(float(value) for value in params), max_offset=max_offset)
 
 
 class GainBox:
@@ -92,7 +93,8 @@ class ClosedLoopSpace:
         return self.build(self.decode(params), env)
 
     def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
-        save_feedback_policy(run_dir / BEST_POLICY, *self.decode(params), name)
+        balls = self.cfg.env.get("balls", 1)
+        save_feedback_policy(run_dir / BEST_POLICY, *self.decode(params), name, balls)
         return BEST_POLICY
 
     def describe(self, params: torch.Tensor, name: str) -> dict:

@@ -10,17 +10,26 @@ centimetre off-centre hits the cone's wall. ``FeedbackPolicy`` closes both loops
   their timing relative to the ball, whatever its last flight took.
 - **Landing tracking.** While the ball falls toward the cup, the landing point is predicted from
   its position and velocity (ballistic, the env's gravity), and the cup's horizontal offset from
-  the command moves by ``land_gain`` × the error each step, up to ``MAX_OFFSET``. The pan joint
+  the command moves by ``land_gain`` × the error each step, up to ``max_offset``. The pan joint
   moves the cup sideways (y); the shoulder lift and elbow turned by opposite angles move it
   along x without tilting it. Between flights the offset decays by ``decay`` per step, back to
   the command.
 
+**Several balls** (``env.balls`` > 1): each ball locks the phase as it comes down, so a command
+whose cycle is one throw alternates the balls, the one landing setting the clock for the throw
+of the next. The cup tracks the ball that lands soonest, and only while no ball sits in it (at
+most ``TRACK_HEIGHT`` above the throat): a held ball is thrown from the command's path, not from
+a cup already moving toward the next catch. With one ball this is the one-ball rule above.
+
 The four gains and the aim point ``(bias_x, bias_y)`` form the parameter vector ``θ`` that
-``algo=feedback`` (the search space ``jugglerl.dps.spaces.feedback_gains``) searches; this module
-needs no torch. A policy file is YAML of ``kind: feedback``: ``name``, ``command`` (a command
-mapping) and ``feedback`` (the gains by name). Shipped: ``closed_loop_gains`` (gains searched for
-``dps_best``), ``closed_loop_tolerant`` and ``closed_loop`` (command and gains searched together,
-``algo=closed_loop``, under growing imprecision).
+``algo=feedback`` (the search space ``jugglerl.dps.spaces.feedback_gains``) searches;
+``max_offset`` (default ``MAX_OFFSET``) is the policy's and not searched. This module needs no
+torch. A policy file is YAML of ``kind: feedback``: ``name``, ``command`` (a command mapping),
+``feedback`` (the gains by name, ``max_offset`` optional) and optionally ``balls``, the number of
+balls it juggles, which the env must then have (searches write it when ``env.balls`` > 1).
+Shipped: ``closed_loop_gains`` (gains searched for ``dps_best``), ``closed_loop_tolerant`` and
+``closed_loop`` (command and gains searched together, ``algo=closed_loop``, under growing
+imprecision), and ``two_balls`` (the same search with two balls, from ``two_balls_start``).
 """
 
 from __future__ import annotations
@@ -46,7 +55,7 @@ TRACK_HEIGHT = 0.12
 TRACK_MAX_RISE = 0.5
 #: m above the cup where the predicted landing point is taken.
 LANDING_HEIGHT = 0.05
-#: m, largest horizontal offset of the cup from the command.
+#: m, largest horizontal offset of the cup from the command unless a policy sets its own.
 MAX_OFFSET = 0.05
 #: m of cup travel per rad: pan (y) and the lift/elbow pair (x), at the paper's home pose
 #: (kinematic, from ``mj_jac``; the pair turns the upper arm, whose length is the UR5e's a2).
@@ -69,9 +78,11 @@ class FeedbackGains:
     decay: float  # per env step while not tracking, the offset's factor toward the command
     bias_x: float  # m, landing point (relative to the cup) the tracking aims for
     bias_y: float
+    max_offset: float = MAX_OFFSET  # m, largest horizontal offset of the cup (not searched)
 
 
-PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains))
+#: The searched gains: ``θ`` of the feedback spaces.
+PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains))[:-1]
 
 
 class FeedbackPolicy:
@@ -84,40 +95,62 @@ class FeedbackPolicy:
         unwrapped = env.unwrapped
         self._dt = unwrapped.dt
         self._gravity = -unwrapped.gravity
+        self._balls = [unwrapped.ball_slice(ball) for ball in range(unwrapped.balls)]
         self.reset()
 
     def reset(self) -> None:
         self.phase: float | None = None
-        self._armed = True
+        self._armed = [True] * len(self._balls)
         self.offset = np.zeros(2)
 
     def act(self, observation: np.ndarray, time: float) -> np.ndarray:
-        g = self.gains
         if self.phase is None:  # the phase clock starts at the command's start, lead-in included
             self.phase = time - self.command.lead_in
         else:
             self.phase += self._dt
-        ball, ball_velocity = observation[6:9], observation[9:12]
         cup, cup_velocity = observation[12:15], observation[15:18]
-        height = ball[2] - cup[2]
-        if self._armed and height < LOCK_HEIGHT and ball_velocity[2] < 0:
-            since = (LOCK_HEIGHT - height) / max(cup_velocity[2] - ball_velocity[2], 1e-3)
-            cycle = self.command.cycle
-            error = (g.land_phase - (self.phase - since) + cycle / 2) % cycle - cycle / 2
-            self.phase += g.phase_gain * error
-            self._armed = False
-        if height > LOCK_HEIGHT + LOCK_REARM:
-            self._armed = True
-        if height > TRACK_HEIGHT and ball_velocity[2] < TRACK_MAX_RISE:
-            rise = ball_velocity[2]
-            fall = max(height - LANDING_HEIGHT, 0.0)
-            flight = (rise + math.sqrt(rise * rise + 2 * self._gravity * fall)) / self._gravity
-            landing = ball[:2] + ball_velocity[:2] * flight
-            error = landing - cup[:2] - (g.bias_x, g.bias_y)
-            self.offset = np.clip(self.offset + g.land_gain * error, -MAX_OFFSET, MAX_OFFSET)
+        held = False
+        soonest = None  # (flight time, landing point) of the ball that lands first
+        for ball, seen in enumerate(self._balls):
+            position, velocity = observation[seen][:3], observation[seen][3:]
+            height = position[2] - cup[2]
+            self._lock_phase(ball, height, velocity[2], cup_velocity[2])
+            if height <= TRACK_HEIGHT:
+                held = True
+            elif velocity[2] < TRACK_MAX_RISE:
+                landing = self._landing(position, velocity, height)
+                if soonest is None or landing[0] < soonest[0]:
+                    soonest = landing
+        g = self.gains
+        if soonest is not None and not held:
+            error = soonest[1] - cup[:2] - (g.bias_x, g.bias_y)
+            self.offset = np.clip(self.offset + g.land_gain * error, -g.max_offset, g.max_offset)
         else:
             self.offset *= g.decay
         return ctrl_to_action(self.command.cycle_setpoints(self.phase) + steer(self.offset))
+
+    def _lock_phase(self, ball: int, height: float, rise: float, cup_rise: float) -> None:
+        """Pull the phase clock toward ``land_phase`` as ``ball`` (``height`` above the cup,
+        rising at ``rise`` m/s, the cup at ``cup_rise``) falls through ``LOCK_HEIGHT``, at the
+        moment within the step it did so."""
+        if self._armed[ball] and height < LOCK_HEIGHT and rise < 0:
+            since = (LOCK_HEIGHT - height) / max(cup_rise - rise, 1e-3)
+            cycle = self.command.cycle
+            error = (self.gains.land_phase - (self.phase - since) + cycle / 2) % cycle - cycle / 2
+            self.phase += self.gains.phase_gain * error
+            self._armed[ball] = False
+        if height > LOCK_HEIGHT + LOCK_REARM:
+            self._armed[ball] = True
+
+    def _landing(
+        self, position: np.ndarray, velocity: np.ndarray, height: float
+    ) -> tuple[float, np.ndarray]:
+        """(s until the ball, ``height`` above the cup, comes down to ``LANDING_HEIGHT``; where it
+        is then, horizontally), for ballistic flight under the env's gravity."""
+        rise = velocity[2]
+        fall = max(height - LANDING_HEIGHT, 0.0)
+        flight = (rise + math.sqrt(rise * rise + 2 * self._gravity * fall)) / self._gravity
+        return flight, position[:2] + velocity[:2] * flight
 
 
 def steer(offset: np.ndarray) -> np.ndarray:
@@ -128,22 +161,43 @@ def steer(offset: np.ndarray) -> np.ndarray:
 
 # --- files ----------------------------------------------------------------------------------
 def feedback_policy_from_dict(data: dict, source: str, env: gym.Env) -> FeedbackPolicy:
-    """A ``FeedbackPolicy`` from a policy file's mapping; ``CommandError`` names a malformed one."""
-    if set(data) != {"kind", "name", "command", "feedback"}:
-        raise CommandError(f"{source}: expected the keys kind, name, command, feedback")
+    """A ``FeedbackPolicy`` from a policy file's mapping; ``CommandError`` names a malformed one,
+    or one that states ``balls`` (the number it juggles) other than the env's."""
+    required = {"kind", "name", "command", "feedback"}
+    if not required <= set(data) <= required | {"balls"}:
+        raise CommandError(
+            f"{source}: expected the keys kind, name, command, feedback (and optionally balls)"
+        )
+    balls = env.unwrapped.balls
+    if "balls" in data and data["balls"] != balls:
+        raise CommandError(
+            f"policy {data['name']} juggles balls={data['balls']} but the env has {balls}: run"
+            f" it with env.balls={data['balls']}"
+        )
     command = command_from_dict(data["command"], f"{source}: command")
     gains = data["feedback"]
-    if not isinstance(gains, dict) or set(gains) != set(PARAM_NAMES):
-        raise CommandError(f"{source}: feedback needs exactly the keys {', '.join(PARAM_NAMES)}")
+    if not isinstance(gains, dict) or not set(PARAM_NAMES) <= set(gains) <= {
+        *PARAM_NAMES,
+        "max_offset",
+    }:
+        raise CommandError(
+            f"{source}: feedback needs exactly the keys {', '.join(PARAM_NAMES)} (and optionally"
+            " max_offset)"
+        )
     try:
         values = FeedbackGains(**{key: float(value) for key, value in gains.items()})
     except (TypeError, ValueError) as error:
         raise CommandError(f"{source}: feedback gains must be numbers ({error})") from None
+    if not 0 < values.max_offset < math.inf:
+        raise CommandError(f"{source}: feedback max_offset must be a positive number of metres")
     return FeedbackPolicy(command, values, env)
 
 
 def save_feedback_policy(
-    path: str | Path, command: ViaPointCommand, gains: FeedbackGains, name: str
+    path: str | Path, command: ViaPointCommand, gains: FeedbackGains, name: str, balls: int = 1
 ) -> Path:
+    """Write a feedback policy file; ``balls`` > 1 is stated in it (``balls: N``)."""
     data = {"kind": KIND, "name": name, "command": command.to_dict(), "feedback": asdict(gains)}
+    if balls > 1:
+        data["balls"] = balls
     return write_policy_file(data, path)
