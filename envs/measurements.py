@@ -67,12 +67,12 @@ class SceneMeasurements:
         Clear means more than a ball radius outside the cone: a ball sloshing up to the rim is
         neither caught again nor counted as lost.
         """
-        self._heights = [self._ball_height(ball) for ball in range(self.balls)]
-        self._in_cup, self._clear_of_cup = [], []
+        self._heights, self._in_cup, self._clear_of_cup = [], [], []
+        margin = self.ball_radius
         for ball in range(self.balls):
+            self._heights.append(self._ball_height(ball))
             radial, height = self.ball_in_cup_frame(ball)
             self._in_cup.append(0.0 <= height <= scene.CUP_DEPTH and radial <= scene.CUP_TOP_RADIUS)
-            margin = self.ball_radius
             self._clear_of_cup.append(
                 height > scene.CUP_DEPTH + margin or radial > scene.CUP_TOP_RADIUS + margin
             )

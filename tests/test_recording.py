@@ -253,16 +253,22 @@ def test_evaluate_records_the_episode_it_runs(tmp_path):
     assert RrdReader(path).blueprints(), "no default layout was sent"
 
 
-def test_plot_recording_draws_the_ball_height_from_a_file(tmp_path):
-    path, metrics, _ = record_expert(tmp_path, duration=8.0)
-    out = tmp_path / "plot.png"
+def plot_recording(path: Path, out: Path, seconds: float) -> subprocess.CompletedProcess:
+    """``python scripts/plot_recording.py PATH --out OUT --seconds SECONDS``, checked to succeed."""
     script = Path(__file__).resolve().parents[1] / "scripts" / "plot_recording.py"
     result = subprocess.run(
-        [sys.executable, str(script), str(path), "--out", str(out), "--seconds", "8"],
+        [sys.executable, str(script), str(path), "--out", str(out), "--seconds", str(seconds)],
         capture_output=True,
         text=True,
     )
     assert result.returncode == 0, result.stderr
+    return result
+
+
+def test_plot_recording_draws_the_ball_height_from_a_file(tmp_path):
+    path, metrics, _ = record_expert(tmp_path, duration=8.0)
+    out = tmp_path / "plot.png"
+    result = plot_recording(path, out, seconds=8)
     assert f"1 ball(s), 401 heights each, {metrics.throws} throws" in result.stdout
     image = iio.imread(out)
     assert image.shape == (300, 900, 3)
@@ -277,13 +283,7 @@ def test_a_two_ball_recording_plots_each_balls_height_in_its_colour(tmp_path):
     np.testing.assert_array_equal(first[0], second[0])
     assert (second[1][:10] > first[1][:10] + 1.5).all()  # the second starts 2 m higher
     out = tmp_path / "plot.png"
-    script = Path(__file__).resolve().parents[1] / "scripts" / "plot_recording.py"
-    result = subprocess.run(
-        [sys.executable, str(script), str(path), "--out", str(out), "--seconds", "3"],
-        capture_output=True,
-        text=True,
-    )
-    assert result.returncode == 0, result.stderr
+    result = plot_recording(path, out, seconds=3)
     assert "2 ball(s), 151 heights each" in result.stdout
     image = iio.imread(out)
     blue = (image == [26, 76, 230]).all(axis=-1)  # the second ball's colour (scene.py)

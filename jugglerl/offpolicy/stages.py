@@ -185,9 +185,9 @@ def _variants(perturbed, where: str) -> tuple[dict, ...]:
 def resume_note(stages: list[Stage], frames: int, buffer_size: int) -> str | None:
     """What a run resumed at ``frames`` goes without (``None`` for a new run). Checkpoints hold
     no replay buffers (too large to save at every checkpoint: docs/usage.md gives their size)
-    and no env mid-episode: the resumed run learns only from
-    frames collected from here, its envs start new episodes, and a later stage that draws
-    ``demo_fraction`` of its batches from demonstrations draws on those collected from here."""
+    and no env mid-episode: the resumed run learns only from frames collected from here, its
+    envs start new episodes, and a later stage that draws ``demo_fraction`` of its batches from
+    demonstrations draws on those collected from here."""
     if frames == 0:
         return None
     note = (

@@ -81,8 +81,8 @@ class FeedbackGains:
     max_offset: float = MAX_OFFSET  # m, largest horizontal offset of the cup (not searched)
 
 
-#: The searched gains: ``θ`` of the feedback spaces.
-PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains))[:-1]
+#: The searched gains: ``θ`` of the feedback spaces (every field but ``max_offset``).
+PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains) if f.name != "max_offset")
 
 
 class FeedbackPolicy:
@@ -176,10 +176,8 @@ def feedback_policy_from_dict(data: dict, source: str, env: gym.Env) -> Feedback
         )
     command = command_from_dict(data["command"], f"{source}: command")
     gains = data["feedback"]
-    if not isinstance(gains, dict) or not set(PARAM_NAMES) <= set(gains) <= {
-        *PARAM_NAMES,
-        "max_offset",
-    }:
+    allowed = {*PARAM_NAMES, "max_offset"}
+    if not isinstance(gains, dict) or not set(PARAM_NAMES) <= set(gains) <= allowed:
         raise CommandError(
             f"{source}: feedback needs exactly the keys {', '.join(PARAM_NAMES)} (and optionally"
             " max_offset)"
