@@ -17,6 +17,7 @@ from test_evaluate_script import run_evaluate
 from jugglerl.commands import load_command
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
+from jugglerl.policies.loading import load_policy
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column, entities, timelines
@@ -237,6 +238,16 @@ def test_throw_markers_and_heights_agree_with_the_env(tmp_path):
     assert metrics.throws >= 3
     assert crossings == len(marker_times) == metrics.throws
     assert (marker_heights >= 1.0).all()
+
+
+def test_two_ball_throw_markers_sit_on_the_ball_thrown(tmp_path):
+    env = JuggleEnv(duration=8.0, balls=2)
+    with RerunLogger("episode", tmp_path) as logger:
+        recorder = EpisodeRecorder(env, logger.recording)
+        metrics = run_episode(recorder, load_policy("two_balls", env), seed=0)
+    _, markers = column(logger.path, "plots/throws", "Scalars:scalars", "sim_time")
+    assert min(metrics.throws_per_ball) >= 2
+    assert len(markers) == metrics.throws and (markers >= 1.0).all()
 
 
 # --- evaluate.py ---------------------------------------------------------------------------

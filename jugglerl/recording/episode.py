@@ -40,7 +40,8 @@ class EpisodeRecorder(gym.Wrapper):
       a square outline at its height;
     - ``plots/ball_height`` every env step (with several balls, ``plots/ball_1_height``, ... too,
       in each ball's colour), ``plots/threshold`` as a line, ``plots/throws`` a
-      marker at the height of each counted throw (the env's own count, ``info["throws"]``).
+      marker at the height of the ball thrown for each counted throw (the env's own count,
+      ``info["throws_per_ball"]``).
 
     All on the ``sim_time`` timeline. Samples are buffered and sent in columns (a log call per
     sample would cost more than the physics). To record several episodes in one stream, give each
@@ -79,7 +80,7 @@ class EpisodeRecorder(gym.Wrapper):
         self._start_buffers()
         self._recording = True
         self._next_frame = 0.0
-        self._throws = info["throws"]
+        self._throws_per_ball = info["throws_per_ball"]
         self._sample(info)
         return observation, info
 
@@ -151,10 +152,13 @@ class EpisodeRecorder(gym.Wrapper):
         time = info["time"]
         self._times.append(time)
         self._heights.append(info["ball_heights"])
-        if info["throws"] > self._throws:
-            self._throws = info["throws"]
-            self._throw_times.append(time)
-            self._throw_heights.append(info["ball_height"])
+        for ball, (count, before) in enumerate(
+            zip(info["throws_per_ball"], self._throws_per_ball, strict=True)
+        ):
+            if count > before:  # a marker at the height of the ball thrown
+                self._throw_times.append(time)
+                self._throw_heights.append(info["ball_heights"][ball])
+        self._throws_per_ball = info["throws_per_ball"]
         if time >= self._next_frame - 1e-9:  # frames on a grid of frame_period seconds
             self._next_frame = (math.floor(time / self.frame_period + 1e-9) + 1) * self.frame_period
             self._add_frame(time)
