@@ -1,12 +1,13 @@
 """The joint search space (``algo=closed_loop``): a command and its feedback gains together."""
 
 import json
+from dataclasses import replace
 
 from cli import run_short_search, run_train, train_config
 from search_spaces import assert_wide_samples_are_valid_policies
 
 from jugglerl.dps.spaces.closed_loop import CommandAndGainSpace
-from jugglerl.policies.feedback import FeedbackPolicy
+from jugglerl.policies.feedback import FIXED_NAMES, FeedbackPolicy, save_feedback_policy
 from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
 
@@ -17,6 +18,19 @@ def test_it_starts_at_its_start_policy_and_decodes_back_to_it():
     shipped = load_policy("closed_loop_gains", JuggleEnv())
     assert command == shipped.command and gains == shipped.gains
     assert len(space.start) == len(space.stds) == 10 + 6
+
+
+def test_samples_keep_the_starts_own_settings(tmp_path):
+    shipped = load_policy("closed_loop_gains", JuggleEnv())
+    own = replace(shipped.gains, max_offset=0.08, hold_gain=0.01, hold_damping=0.02)
+    start = save_feedback_policy(tmp_path / "start.yaml", shipped.command, own, "centred")
+    cfg = train_config("algo=closed_loop", f"algo.start={start}")
+    space = CommandAndGainSpace(cfg)
+    sample = space.project(space.start + space.stds)
+    _, gains = space.decode(sample)
+    assert gains != own and {n: getattr(gains, n) for n in FIXED_NAMES} == {
+        n: getattr(own, n) for n in FIXED_NAMES
+    }
 
 
 def test_its_constraints_hold_over_many_wide_samples():

@@ -16,6 +16,7 @@ from jugglerl.dps.spaces.feedback_gains import FeedbackGainSpace
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import (
+    FIXED_NAMES,
     LOCK_HEIGHT,
     PARAM_NAMES,
     FeedbackGains,
@@ -143,6 +144,39 @@ def test_a_policy_file_may_set_the_cups_largest_offset(tmp_path):
         load_policy(str(tmp_path / "bad.yaml"), env)
 
 
+def test_the_cup_follows_and_damps_a_ball_rolling_in_it():
+    env = JuggleEnv()
+    gains = FeedbackGains(0.6, 0.0, 0.25, 0.5, 0.01, 0.0, hold_gain=0.2, hold_damping=0.1)
+    policy = FeedbackPolicy(load_command("dps_best"), gains, env)
+    policy.reset()
+    rolling = falling_ball(0.05, x=0.04, vz=0.0)  # in the cup, 4 cm along x; aim 1 cm
+    rolling[10] = 0.3  # rolling along y at 0.3 m/s, the cup at rest
+    policy.act(rolling, 0.0)
+    np.testing.assert_allclose(policy.offset, [0.2 * 0.03, 0.1 * 0.3])
+    policy.act(rolling, 0.02)  # the offset decays as without centring, and the centring adds
+    np.testing.assert_allclose(policy.offset, [0.5 * 0.006 + 0.006, 0.5 * 0.03 + 0.03])
+    rolling[10] = 3.0
+    policy.act(rolling, 0.04)  # never beyond max_offset
+    assert policy.offset[1] == pytest.approx(gains.max_offset)
+    no_centring = replace(gains, hold_gain=0.0, hold_damping=0.0)
+    plain = FeedbackPolicy(load_command("dps_best"), no_centring, env)
+    plain.reset()
+    plain.act(rolling, 0.0)  # without centring gains a held ball leaves the offset at rest
+    np.testing.assert_allclose(plain.offset, [0.0, 0.0])
+
+
+def test_centring_gains_are_policy_file_keys_and_must_be_finite(tmp_path):
+    env = JuggleEnv()
+    gains = FeedbackGains(0.6, 0.0, 1.0, 1.0, 0.0, 0.0, hold_gain=0.01, hold_damping=0.015)
+    path = save_feedback_policy(tmp_path / "p.yaml", load_command("expert"), gains, "centred")
+    assert load_policy(str(path), env).gains == gains
+    data = yaml.safe_load(path.read_text())
+    data["feedback"]["hold_damping"] = float("nan")
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(CommandError, match="bad.yaml: feedback gains must be finite numbers"):
+        load_policy(str(tmp_path / "bad.yaml"), env)
+
+
 def gain_space(bounds: dict) -> FeedbackGainSpace:
     cfg = train_config("algo=feedback")
     cfg.algo.bounds = bounds
@@ -196,7 +230,7 @@ def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
     result = run_train(*short)
     assert result.returncode == 0, result.stderr
     metrics = json.loads((run_dir / "metrics.json").read_text())
-    assert metrics["rollouts"] == 4 and set(metrics["best_gains"]) == {*PARAM_NAMES, "max_offset"}
+    assert metrics["rollouts"] == 4 and set(metrics["best_gains"]) == {*PARAM_NAMES, *FIXED_NAMES}
     assert "feedback (ereps): best scored" in result.stdout
     evaluated = run_script(
         "evaluate.py",

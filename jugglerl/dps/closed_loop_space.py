@@ -18,7 +18,6 @@ from omegaconf import DictConfig
 from jugglerl.config import make_juggle_env
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
 from jugglerl.policies.feedback import (
-    MAX_OFFSET,
     PARAM_NAMES,
     FeedbackGains,
     FeedbackPolicy,
@@ -28,9 +27,11 @@ from jugglerl.policies.feedback import (
 BEST_POLICY = "best_policy.yaml"
 
 
-def gains_from_params(params: torch.Tensor, max_offset: float = MAX_OFFSET) -> FeedbackGains:
-    """θ (``PARAM_NAMES`` order) as ``FeedbackGains`` steering the cup up to ``max_offset``."""
-    return FeedbackGains(*(float(value) for value in params), max_offset=max_offset)
+def gains_from_params(params: torch.Tensor, **fixed: float) -> FeedbackGains:
+    """θ (``PARAM_NAMES`` order) as ``FeedbackGains``, with the policy's own settings
+    (``FIXED_NAMES``: ``max_offset``, the centring gains) from ``fixed``, their defaults where
+    absent."""
+    return FeedbackGains(*(float(value) for value in params), **fixed)
 
 
 class GainBox:

@@ -14,28 +14,37 @@ centimetre off-centre hits the cone's wall. ``FeedbackPolicy`` closes both loops
   moves the cup sideways (y); the shoulder lift and elbow turned by opposite angles move it
   along x without tilting it. Between flights the offset decays by ``decay`` per step, back to
   the command.
+- **Centring in the cup** (``hold_gain``, ``hold_damping``; 0 unless a policy sets them). At the
+  paper's gravity the ball sits loosely in the cone: the arm's small jitter rolls it off-centre,
+  and a ball thrown off-centre leaves sideways. While a ball sits in the cup the offset also
+  moves by ``hold_gain`` × the ball's horizontal offset from the aim point and ``hold_damping``
+  × its horizontal velocity relative to the cup, so the cup follows the rolling ball and damps
+  it before the throw.
 
 **Several balls** (``env.balls`` > 1): each ball locks the phase as it comes down, so a command
-whose cycle is one throw alternates the balls, the one landing setting the clock for the throw
-of the next. The cup tracks the ball that lands soonest, and only while no ball sits in it (at
-most ``TRACK_HEIGHT`` above the throat): a held ball is thrown from the command's path, not from
-a cup already moving toward the next catch. With one ball this is the one-ball rule above.
+whose cycle is one throw alternates the balls, the one landing setting the clock for the throw of
+the next. The cup tracks the ball that lands soonest, and only while no ball sits in it (at most
+``TRACK_HEIGHT`` above the throat): a held ball is thrown from the command's path (moved only by
+the centring gains), not from a cup already moving toward the next catch. With one ball this is the
+one-ball rule above.
 
 The four gains and the aim point ``(bias_x, bias_y)`` form the parameter vector ``θ`` that
 ``algo=feedback`` (the search space ``jugglerl.dps.spaces.feedback_gains``) searches;
-``max_offset`` (default ``MAX_OFFSET``) is the policy's and not searched. This module needs no
+``max_offset`` (default ``MAX_OFFSET``) and the centring gains are the policy's own settings
+(``FIXED_NAMES``), not searched: the searches keep their start's. This module needs no
 torch. A policy file is YAML of ``kind: feedback``: ``name``, ``command`` (a command mapping),
-``feedback`` (the gains by name, ``max_offset`` optional) and optionally ``balls``, the number of
+``feedback`` (the gains by name, ``FIXED_NAMES`` optional) and optionally ``balls``, the number of
 balls it juggles, which the env must then have (searches write it when ``env.balls`` > 1).
 Shipped: ``closed_loop_gains`` (gains searched for ``dps_best``), ``closed_loop_tolerant`` and
 ``closed_loop`` (command and gains searched together, ``algo=closed_loop``, under growing
-imprecision), and ``two_balls`` (the same search with two balls, from ``two_balls_start``).
+imprecision), ``closed_loop_centred`` (``closed_loop`` centring the ball it holds), and
+``two_balls`` (the same search with two balls, from ``two_balls_start``, centring too).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, astuple, dataclass, fields
 from pathlib import Path
 
 import gymnasium as gym
@@ -78,11 +87,15 @@ class FeedbackGains:
     decay: float  # per env step while not tracking, the offset's factor toward the command
     bias_x: float  # m, landing point (relative to the cup) the tracking aims for
     bias_y: float
-    max_offset: float = MAX_OFFSET  # m, largest horizontal offset of the cup (not searched)
+    max_offset: float = MAX_OFFSET  # m, largest horizontal offset of the cup
+    hold_gain: float = 0.0  # per env step while a ball sits in the cup, fraction of its offset
+    hold_damping: float = 0.0  # s: of its velocity relative to the cup, added to the cup offset
 
 
-#: The searched gains: ``θ`` of the feedback spaces (every field but ``max_offset``).
-PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains) if f.name != "max_offset")
+#: The policy's own settings, which the searches keep from their start.
+FIXED_NAMES = ("max_offset", "hold_gain", "hold_damping")
+#: The searched gains: ``θ`` of the feedback spaces (every field but ``FIXED_NAMES``).
+PARAM_NAMES = tuple(f.name for f in fields(FeedbackGains) if f.name not in FIXED_NAMES)
 
 
 class FeedbackPolicy:
@@ -109,22 +122,29 @@ class FeedbackPolicy:
         else:
             self.phase += self._dt
         cup, cup_velocity = observation[12:15], observation[15:18]
-        held = False
+        held = None  # (position, velocity) of the first ball sitting in the cup
         soonest = None  # (flight time, landing point) of the ball that lands first
         for ball, seen in enumerate(self._balls):
             position, velocity = observation[seen][:3], observation[seen][3:]
             height = position[2] - cup[2]
             self._lock_phase(ball, height, velocity[2], cup_velocity[2])
             if height <= TRACK_HEIGHT:
-                held = True
+                if held is None:
+                    held = (position, velocity)
             elif velocity[2] < TRACK_MAX_RISE:
                 landing = self._landing(position, velocity, height)
                 if soonest is None or landing[0] < soonest[0]:
                     soonest = landing
         g = self.gains
-        if soonest is not None and not held:
-            error = soonest[1] - cup[:2] - (g.bias_x, g.bias_y)
-            self.offset = np.clip(self.offset + g.land_gain * error, -g.max_offset, g.max_offset)
+        aim = np.array([g.bias_x, g.bias_y])
+        if soonest is not None and held is None:
+            step = g.land_gain * (soonest[1] - cup[:2] - aim)
+            self.offset = np.clip(self.offset + step, -g.max_offset, g.max_offset)
+        elif held is not None:
+            position, velocity = held
+            step = g.hold_gain * (position[:2] - cup[:2] - aim)
+            step += g.hold_damping * (velocity[:2] - cup_velocity[:2])
+            self.offset = np.clip(g.decay * self.offset + step, -g.max_offset, g.max_offset)
         else:
             self.offset *= g.decay
         return ctrl_to_action(self.command.cycle_setpoints(self.phase) + steer(self.offset))
@@ -176,11 +196,11 @@ def feedback_policy_from_dict(data: dict, source: str, env: gym.Env) -> Feedback
         )
     command = command_from_dict(data["command"], f"{source}: command")
     gains = data["feedback"]
-    allowed = {*PARAM_NAMES, "max_offset"}
+    allowed = {*PARAM_NAMES, *FIXED_NAMES}
     if not isinstance(gains, dict) or not set(PARAM_NAMES) <= set(gains) <= allowed:
         raise CommandError(
             f"{source}: feedback needs exactly the keys {', '.join(PARAM_NAMES)} (and optionally"
-            " max_offset)"
+            f" {', '.join(FIXED_NAMES)})"
         )
     try:
         values = FeedbackGains(**{key: float(value) for key, value in gains.items()})
@@ -188,6 +208,8 @@ def feedback_policy_from_dict(data: dict, source: str, env: gym.Env) -> Feedback
         raise CommandError(f"{source}: feedback gains must be numbers ({error})") from None
     if not 0 < values.max_offset < math.inf:
         raise CommandError(f"{source}: feedback max_offset must be a positive number of metres")
+    if not all(map(math.isfinite, astuple(values))):
+        raise CommandError(f"{source}: feedback gains must be finite numbers")
     return FeedbackPolicy(command, values, env)
 
 

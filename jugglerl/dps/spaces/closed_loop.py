@@ -1,13 +1,14 @@
 """``closed_loop`` (``algo=closed_loop``): a command's via-points and its feedback gains together.
 
 θ is the via-point command's θ (cycle and via-points, ``jugglerl.dps.params``) followed by the
-``FeedbackGains``, searched from the feedback policy ``algo.start`` (its command and gains; its
-``max_offset`` is kept), and rolled out closed loop under each of ``algo.conditions``, which may
-include the imprecision perturbations (action noise, a tracked ball): a throw that only just
-clears the threshold loses its throws to them, so the search is pushed to throws with a margin,
-and the feedback, which catches a ball that lands early or late, lets it shorten the cycle all
-the same. Constraints: the command's (``algo.min_cycle``, ``algo.max_cycle``, ``algo.min_gap``,
-the servos' ranges) and ``algo.bounds`` on the gains. The best θ is written as ``best_policy.yaml``.
+``FeedbackGains``, searched from the feedback policy ``algo.start`` (its command and gains; its own
+settings, ``max_offset`` and the centring gains, are kept), and rolled out closed loop under each
+of ``algo.conditions``, which may include the imprecision perturbations (action noise, a tracked
+ball): a throw that only just clears the threshold loses its throws to them, so the search is
+pushed to throws with a margin, and the feedback, which catches a ball that lands early or late,
+lets it shorten the cycle all the same. Constraints: the command's (``algo.min_cycle``,
+``algo.max_cycle``, ``algo.min_gap``, the servos' ranges) and ``algo.bounds`` on the gains. The
+best θ is written as ``best_policy.yaml``.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from jugglerl.dps.params import (
     params_to_command,
 )
 from jugglerl.dps.spaces import SPACES
-from jugglerl.policies.feedback import PARAM_NAMES, FeedbackPolicy
+from jugglerl.policies.feedback import FIXED_NAMES, PARAM_NAMES, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
 
 
@@ -40,7 +41,7 @@ class CommandAndGainSpace(ClosedLoopSpace):
         if not isinstance(start, FeedbackPolicy):
             raise ValueError(f"algo.start={algo.start} is not a feedback policy (kind: feedback)")
         self.pan, self.lead_in = start.command.pan, start.command.lead_in
-        self.max_offset = start.gains.max_offset
+        self.fixed = {name: getattr(start.gains, name) for name in FIXED_NAMES}
         self.constraints = ViaPointConstraints.from_model(
             env.unwrapped.model, algo.min_cycle, algo.max_cycle, algo.min_gap
         )
@@ -70,7 +71,7 @@ class CommandAndGainSpace(ClosedLoopSpace):
 
     def decode(self, params: torch.Tensor) -> tuple:
         command = params_to_command(params[: self.split], self.pan, "closed_loop", self.lead_in)
-        return command, gains_from_params(params[self.split :], self.max_offset)
+        return command, gains_from_params(params[self.split :], **self.fixed)
 
     def record(self, distribution: SearchDistribution) -> dict[str, float]:
         """The cycle's mean and std, and the gains' means."""
