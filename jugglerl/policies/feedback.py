@@ -88,8 +88,8 @@ class FeedbackGains:
     bias_x: float  # m, landing point (relative to the cup) the tracking aims for
     bias_y: float
     max_offset: float = MAX_OFFSET  # m, largest horizontal offset of the cup
-    hold_gain: float = 0.0  # per env step while a ball sits in the cup, fraction of its offset
-    hold_damping: float = 0.0  # s: of its velocity relative to the cup, added to the cup offset
+    hold_gain: float = 0.0  # per env step, fraction of a held ball's offset from the aim point
+    hold_damping: float = 0.0  # s, times its velocity relative to the cup: both add to the offset
 
 
 #: The policy's own settings, which the searches keep from their start.
