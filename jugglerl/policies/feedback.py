@@ -136,7 +136,7 @@ class FeedbackPolicy:
                 if soonest is None or landing[0] < soonest[0]:
                     soonest = landing
         g = self.gains
-        aim = np.array([g.bias_x, g.bias_y])
+        aim = (g.bias_x, g.bias_y)
         if soonest is not None and held is None:
             step = g.land_gain * (soonest[1] - cup[:2] - aim)
             self.offset = np.clip(self.offset + step, -g.max_offset, g.max_offset)
