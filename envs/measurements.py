@@ -60,6 +60,10 @@ class SceneMeasurements:
         local = self.data.site_xmat[self._cup_site].reshape(3, 3).T @ offset
         return math.hypot(local[0], local[1]), float(local[2])
 
+    def ball_in_cup(self, ball: int = 0) -> bool:
+        """Whether ball ``ball``'s centre sat inside the cone, below its rim, after the step."""
+        return self._in_cup[ball]
+
     def _measure_balls(self) -> None:
         """Set, per ball, ``_heights``, ``_in_cup`` (centre inside the cone, below the rim) and
         ``_clear_of_cup``: what a step's events, episode end and info read.

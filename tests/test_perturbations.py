@@ -6,7 +6,8 @@ import pytest
 from jugglerl.commands import load_command
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl_envs import JuggleEnv
-from jugglerl_envs.rewards.juggle import CENTRING_WEIGHT
+from jugglerl_envs.rewards.cradle import CRADLE_SCALE, CRADLE_WEIGHT, cradle_reward
+from jugglerl_envs.rewards.juggle import CENTRING_WEIGHT, juggle_reward
 
 
 def elbow_after_a_setpoint_jump(servo_gain: float) -> float:
@@ -88,6 +89,21 @@ def test_the_juggle_reward_pays_for_a_ball_centred_over_the_cup():
         expected = CENTRING_WEIGHT * max(0.0, 1.0 - offset / 0.1)
         assert reward == pytest.approx(expected, abs=2e-4)  # the cup moved a little in the step
         assert 0 < reward <= CENTRING_WEIGHT
+
+
+def test_the_cradle_reward_charges_a_held_ball_for_its_distance_from_the_cone_axis():
+    env = JuggleEnv(reward="cradle", reset_noise=0.01)
+    hold = env.ctrl_to_action(env.home)
+    env.reset(seed=1)
+    held = 0
+    for _ in range(120):  # the ball falls into the cup held at home, rolls in and settles
+        env.step(hold)
+        radial, _ = env.ball_in_cup_frame()
+        cost = CRADLE_WEIGHT * min(1.0, radial / CRADLE_SCALE) if env.ball_in_cup() else 0.0
+        assert cradle_reward(env, 0) == pytest.approx(juggle_reward(env, 0) - cost)
+        held += cost > 0
+    assert held > 50
+    assert cradle_reward(env, 1) == pytest.approx(cradle_reward(env, 0) + 1.0)
 
 
 # --- imprecision ----------------------------------------------------------------------------------
