@@ -10,6 +10,7 @@ from gymnasium.utils.env_checker import check_env
 
 import jugglerl  # noqa: F401  (registers the id)
 from jugglerl_envs import ENV_ID, JuggleEnv
+from jugglerl_envs.rewards import REWARDS
 
 
 def test_gymnasium_check_env_passes():
@@ -132,7 +133,7 @@ def test_bad_physics_terminates_with_error_instead_of_raising(hold):
     [
         (
             {"reward": "style"},
-            "reward='style' is not available; choose one of contacts, distance, juggle, throws",
+            f"reward='style' is not available; choose one of {', '.join(REWARDS.names())}",
         ),
         ({"gravity": 3.0}, "gravity=3.0 is out of range"),
         ({"frame_skip": 0}, "frame_skip=0 is out of range"),

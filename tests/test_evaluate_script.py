@@ -7,6 +7,7 @@ import yaml
 from cli import run_script
 
 from jugglerl.recording.reading import column
+from jugglerl_envs.rewards import REWARDS
 
 
 def run_evaluate(*overrides: str) -> subprocess.CompletedProcess:
@@ -44,12 +45,13 @@ def test_evaluate_replays_a_command_file(tmp_path):
 
 
 def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
+    rewards = ", ".join(REWARDS.names())
     for override, message in [
         ("policy=missing_command", "error: no policy file at"),
         ("duration=0", "error: duration=0 is out of range"),  # evaluate.py's own key
         (
             "env.reward=style",
-            "error: env.reward='style' is not available; choose one of contacts, distance, juggle,",
+            f"error: env.reward='style' is not available; choose one of {rewards}",
         ),
     ]:
         result = run_evaluate(override, f"hydra.run.dir={tmp_path}")
