@@ -57,6 +57,21 @@ def test_earth_juggler_by_name_juggles_at_real_gravity_within_the_speed_limit(mo
     assert metrics.max_cup_height <= 0.76
 
 
+def test_with_a_weaker_arm_apex_lengthens_the_push_until_the_throws_reach_a_metre_again():
+    data, source = read_policy_file("earth_juggler")
+    held = throw_catch_from_dict(data, source)
+    env = env_preset("earth", duration=15.0, servo_gain=0.95)
+    open_loop = run_episode(env, ThrowCatchPolicy(replace(held, apex=None), env), seed=0)
+    policy = ThrowCatchPolicy(held, env)
+    metrics = run_episode(env, policy, seed=0)
+    assert held.apex == 1.0 and open_loop.throws == 0  # its flights top out under 1 m
+    assert open_loop.time_to_drop is None and metrics.time_to_drop is None
+    assert policy.push_steps == 1 and metrics.throws >= 5
+    nominal = env_preset("earth", duration=15.0)
+    policy = ThrowCatchPolicy(held, nominal)
+    assert run_episode(nominal, policy, seed=0).throws >= 5 and policy.push_steps == 0
+
+
 def test_its_cycle_runs_through_the_four_modes_in_order():
     env = env_preset("earth", duration=6.0)
     policy = load_policy("earth_expert", env)  # its rest pose is the earth preset's home
@@ -130,6 +145,8 @@ def test_a_saved_policy_reads_back_the_same(tmp_path):
         ({"rest": [0.0, -1.5]}, "rest must be 3 finite angles"),
         ({"carry": None}, "carry"),
         ({"extra": 1}, "expected the keys"),
+        ({"apex": -1.0}, "apex must be a positive height"),
+        ({"apex": 1.0, "knots": [[0.3, -1.0, 1.0]]}, "apex needs a throw of at least 2 knots"),
     ],
 )
 def test_malformed_files_are_one_line_errors(change, message):

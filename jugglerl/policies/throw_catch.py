@@ -14,7 +14,13 @@ but reacts to the ball, in four modes:
   throw; elsewhere (the env's home, at the start), carry the ball to ``rest`` first;
 - **throw**: step the lift and elbow setpoints through ``knots`` (each ``[duration s, lift rad,
   elbow rad]`` held for its duration; the env's rate limit, if any, turns the jumps into ramps).
-  If the ball has not left after the knots and ``THROW_TIMEOUT``, carry back;
+  If the ball has not left after the knots and ``THROW_TIMEOUT``, carry back. With an ``apex``
+  (m), the throw holds its height: after a caught flight that topped out below ``apex``, the next
+  throws push one control step longer (the second-to-last knot: the last one brakes); after one
+  that topped out more than ``APEX_BAND`` above it, one step shorter; at most ``MAX_PUSH_STEPS``
+  either way. A weaker arm lags its setpoints more and throws lower (``earth_juggler``: 1.02 m
+  at the servos' nominal kp, 0.94 m at 0.95 × kp, under the 1 m a throw must reach), and a
+  longer push makes that up. Whole steps, because a knot's end acts only at a control step;
 - **catch**: once the ball is ``CLEAR_HEIGHT`` above the throat and the cup has stopped rising
   (switching earlier lets the follow-through lift the cup higher), predict where the ball's
   ballistic flight crosses ``catch_height`` (the env's gravity; while the ball is clear of the
@@ -72,6 +78,13 @@ FLIGHT_FORGET = 0.95
 CAUGHT_REST = 0.1
 #: s after the last knot ends that a ball still in the cup counts as a failed throw.
 THROW_TIMEOUT = 0.5
+#: m above ``apex`` that a flight may top out before the push shortens: more than one control
+#: step of push adds (``earth_juggler``: 0.1-0.13 m at 0.9-1.05 × the servos' kp), so that
+#: a throw held just over ``apex`` stays there.
+APEX_BAND = 0.2
+#: control steps the push may lengthen or shorten: 3 more lift ``earth_juggler``'s cup to about
+#: 0.74 m (the limit is 0.76) and its joints to 2.9 rad/s, and its catches start to miss.
+MAX_PUSH_STEPS = 2
 
 
 @dataclass(frozen=True)
@@ -85,6 +98,7 @@ class ThrowCatch:
     catch_height: float  # the throat's height at the catch
     settle: float  # rest of the ball in the cup before each throw
     carry: float  # duration of the move from the catch back to rest
+    apex: float | None = None  # the flight's top the throw holds (ball centre, m); None: open loop
 
     def __post_init__(self):
         for name in ("rest", "wrist_angles"):
@@ -99,9 +113,16 @@ class ThrowCatch:
         for name in ("catch_height", "settle", "carry"):
             if not math.isfinite(getattr(self, name)) or getattr(self, name) <= 0:
                 raise CommandError(f"{name} must be a positive number")
+        if self.apex is not None:
+            if not math.isfinite(self.apex) or self.apex <= 0:
+                raise CommandError("apex must be a positive height (m) or absent")
+            if len(knots) < 2:
+                raise CommandError("apex needs a throw of at least 2 knots (push, then brake)")
 
 
 FIELD_NAMES = tuple(f.name for f in fields(ThrowCatch))
+#: what a file may leave out: ``env`` and the fields with a default
+OPTIONAL_KEYS = ("env", *(f.name for f in fields(ThrowCatch) if f.default is None))
 
 
 class ThrowCatchPolicy:
@@ -124,7 +145,6 @@ class ThrowCatchPolicy:
         self._rest = np.asarray(params.rest, dtype=float)
         self._home = np.array(unwrapped.home, dtype=float)
         self._knots = np.asarray(params.knots, dtype=float)
-        self._knot_ends = np.cumsum(self._knots[:, 0])
         self._ik = CupIK(params.wrist_angles)
         self._flight = FlightFit(FLIGHT_FORGET)
         self.reset()
@@ -136,6 +156,9 @@ class ThrowCatchPolicy:
         self._slosh = np.zeros(3)  # m/s, the ball's velocity relative to the cup, filtered
         self._target = self._home.copy()  # setpoints (pan, lift, elbow), rad
         self._carry_from = self._home.copy()
+        self.push_steps = 0  # control steps added to the throw's push (``apex``)
+        self._knot_ends = np.cumsum(self._knots[:, 0])
+        self._top = -math.inf  # m: the highest the ball has been in the current flight
 
     def act(self, observation: np.ndarray, time: float) -> np.ndarray:
         ball, ball_velocity = observation[6:9], observation[9:12]
@@ -162,15 +185,18 @@ class ThrowCatchPolicy:
                 self._switch("catch")
                 self._target = self._rest.copy()  # the IK's first guess: the throw ends far off
                 self._flight.reset()
+                self._top = -math.inf
             elif self._clock > self._knot_ends[-1] + THROW_TIMEOUT:
                 self._switch("carry")
         if self.mode == "catch":
             flying = relative[2] > CLEAR_HEIGHT
             if flying:
                 self._flight.add(self._clock, ball[:2])
+                self._top = max(self._top, float(ball[2]))
             landing = self._landing(ball, ball_velocity, fitted=flying)
             self._target = self._ik.solve(landing, self._target)
             if self._rested >= CAUGHT_REST:
+                self._hold_apex()
                 self._switch("carry")
         if self.mode == "carry":
             s = min(self._clock / self.params.carry, 1.0)
@@ -180,6 +206,18 @@ class ThrowCatchPolicy:
                 self._target = self._rest.copy()
                 self._switch("settle")
         return ctrl_to_action(self._target)
+
+    def _hold_apex(self) -> None:
+        """Lengthen the next throws' push by a control step if the last flight topped out below
+        ``apex``, shorten it if above ``apex + APEX_BAND``; the knots' end times follow."""
+        apex = self.params.apex
+        if apex is None or not math.isfinite(self._top):
+            return
+        step = (self._top < apex) - (self._top > apex + APEX_BAND)
+        self.push_steps = int(np.clip(self.push_steps + step, -MAX_PUSH_STEPS, MAX_PUSH_STEPS))
+        durations = self._knots[:, 0].copy()
+        durations[-2] += self.push_steps * self._dt
+        self._knot_ends = np.cumsum(durations)
 
     def _switch(self, mode: str) -> None:
         if mode == "carry":
@@ -204,13 +242,16 @@ class ThrowCatchPolicy:
 # --- files ----------------------------------------------------------------------------------
 def throw_catch_from_dict(data: dict, source: str) -> ThrowCatch:
     """The ``ThrowCatch`` of a policy file's mapping; ``CommandError`` names a malformed one."""
-    expected = {"kind", "name", *FIELD_NAMES}
-    if not expected <= set(data) <= expected | {"env"}:
+    expected = {"kind", "name", *FIELD_NAMES} - set(OPTIONAL_KEYS)
+    if not expected <= set(data) <= expected | set(OPTIONAL_KEYS):
         raise CommandError(
-            f"{source}: expected the keys {', '.join(sorted(expected))} (and optionally env)"
+            f"{source}: expected the keys {', '.join(sorted(expected))} (and optionally"
+            f" {', '.join(OPTIONAL_KEYS)})"
         )
     values = {}
     for key in FIELD_NAMES:
+        if data.get(key) is None and key in OPTIONAL_KEYS:
+            continue
         try:
             values[key] = np.asarray(data[key], dtype=float)
         except (TypeError, ValueError):
@@ -221,6 +262,7 @@ def throw_catch_from_dict(data: dict, source: str) -> ThrowCatch:
             wrist_angles=tuple(values["wrist_angles"].ravel().tolist()),
             knots=tuple(map(tuple, np.atleast_2d(values["knots"]).tolist())),
             **{key: float(values[key]) for key in ("catch_height", "settle", "carry")},
+            apex=float(values["apex"]) if "apex" in values else None,
         )
     except (TypeError, ValueError) as error:
         raise CommandError(f"{source}: {error}") from None
@@ -233,6 +275,8 @@ def throw_catch_policy_from_dict(data: dict, source: str, env: gym.Env) -> Throw
 
 def save_throw_catch_policy(path: str | Path, params: ThrowCatch, name: str) -> Path:
     data = {"kind": KIND, "name": name, **asdict(params)}
+    if params.apex is None:
+        del data["apex"]
     data["knots"] = [list(knot) for knot in params.knots]
     for key in ("rest", "wrist_angles"):
         data[key] = list(data[key])
