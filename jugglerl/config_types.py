@@ -18,7 +18,14 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 _ABSENT = object()
 #: Mappings whose entries are the user's to name (conditions, stages), checked where they are
 #: read; a ``+key`` anywhere else adds what nothing reads.
-OPEN_MAPPINGS = ("eval.perturbed", "algo.stages", "algo.rl_stage", "families", "hydra")
+OPEN_MAPPINGS = (
+    "eval.perturbed",
+    "algo.teacher_perturbed",
+    "algo.stages",
+    "algo.rl_stage",
+    "families",
+    "hydra",
+)
 
 
 def check_override_types(overrides: Sequence[str] | None = None) -> None:
