@@ -156,8 +156,7 @@ class ThrowCatchPolicy:
         self._slosh = np.zeros(3)  # m/s, the ball's velocity relative to the cup, filtered
         self._target = self._home.copy()  # setpoints (pan, lift, elbow), rad
         self._carry_from = self._home.copy()
-        self.push_steps = 0  # control steps added to the throw's push (``apex``)
-        self._knot_ends = np.cumsum(self._knots[:, 0])
+        self._set_push(0)
         self._top = -math.inf  # m: the highest the ball has been in the current flight
 
     def act(self, observation: np.ndarray, time: float) -> np.ndarray:
@@ -209,14 +208,20 @@ class ThrowCatchPolicy:
 
     def _hold_apex(self) -> None:
         """Lengthen the next throws' push by a control step if the last flight topped out below
-        ``apex``, shorten it if above ``apex + APEX_BAND``; the knots' end times follow."""
+        ``apex``, shorten it if above ``apex + APEX_BAND``."""
         apex = self.params.apex
         if apex is None or not math.isfinite(self._top):
             return
         step = (self._top < apex) - (self._top > apex + APEX_BAND)
-        self.push_steps = int(np.clip(self.push_steps + step, -MAX_PUSH_STEPS, MAX_PUSH_STEPS))
+        self._set_push(int(np.clip(self.push_steps + step, -MAX_PUSH_STEPS, MAX_PUSH_STEPS)))
+
+    def _set_push(self, steps: int) -> None:
+        """Add ``steps`` control steps to the throw's push (the second-to-last knot) and time
+        the knots' ends from that."""
+        self.push_steps = steps
         durations = self._knots[:, 0].copy()
-        durations[-2] += self.push_steps * self._dt
+        if steps:  # only with an apex, which needs a push and a brake
+            durations[-2] += steps * self._dt
         self._knot_ends = np.cumsum(durations)
 
     def _switch(self, mode: str) -> None:
