@@ -21,6 +21,7 @@ _ABSENT = object()
 OPEN_MAPPINGS = (
     "eval.perturbed",
     "algo.teacher_perturbed",
+    "algo.student_perturbed",
     "algo.stages",
     "algo.rl_stage",
     "families",

@@ -296,16 +296,16 @@ def test_the_phase_features_follow_the_teachers_cycle_and_a_resume_keeps_the_che
     assert state["config"]["state"]["period"] == closed_loop.cycle
 
 
-#: The earth pipeline (``+experiment=earth_apprentice``) with one 32-step batch per stage: three
-#: envs, so that the bc stage's nominal, weaker and stronger arms get one each.
+#: The earth pipeline (``+experiment=earth_apprentice``) with one 32-step batch per stage: four
+#: envs, so that the dagger stage's nominal, weaker and stronger arms and offset start get one each.
 EARTH_STAGED = [
     *(override for override in TINY if not override.startswith("algo=")),
     "+experiment=earth_apprentice",
     "env.duration=8",  # the teacher throws 4 times: enough to time its cycle
-    "collector.num_envs=3",
-    "collector.frames_per_batch=96",
-    "checkpoint_every_frames=96",
-    "algo.stages.0.until=96",
+    "collector.num_envs=4",
+    "collector.frames_per_batch=128",
+    "checkpoint_every_frames=128",
+    "algo.stages.0.until=128",
     "eval.every_frames=0",
 ]
 
@@ -313,19 +313,20 @@ EARTH_STAGED = [
 def test_the_earth_pipeline_clones_earth_juggler_with_three_arms_and_resumes_in_dagger(tmp_path):
     cfg = train_config(*EARTH_STAGED)
     bc, dagger = stages_from_config(cfg)
-    assert bc.variants == ({}, {"servo_gain": 0.95}, {"servo_gain": 1.05})
-    assert dagger.variants == ({},) and "weak_arm" in cfg.eval.perturbed
-    cfg.collector.total_frames = 96
+    arms = ({}, {"servo_gain": 0.95}, {"servo_gain": 1.05})
+    assert bc.variants == arms and dagger.variants == (*arms, {"reset_noise": 0.01})
+    assert "weak_arm" in cfg.eval.perturbed
+    cfg.collector.total_frames = 128
     _, training = train(cfg, tmp_path / "run")
-    frames = training.buffer._buffer[:96]  # the teacher acts with its wider noise
+    frames = training.buffer._buffer[:128]  # the teacher acts with its wider noise
     assert (frames["action"] - frames[TEACHER_ACTION]).std() == pytest.approx(0.01, rel=0.2)
     period = training.cfg.state.period  # earth_juggler's time between throws, not a command's
     assert 1.6 < period < 2.0
     state = load_checkpoint(tmp_path / "run")
-    assert state["stage"] == 0 and state["counters"]["frames"] == 96
+    assert state["stage"] == 0 and state["counters"]["frames"] == 128
 
-    cfg.collector.total_frames = 192
+    cfg.collector.total_frames = 256
     metrics, again = train(cfg, tmp_path / "run", state)
     assert [h["stage"] for h in metrics["history"]] == [0, 1] and again.stage.name == "dagger"
-    assert again.cfg.state.period == period and again.frames == 192
+    assert again.cfg.state.period == period and again.frames == 256
     again.close()
