@@ -45,8 +45,8 @@ class CommandSpace:
         return params_to_command(params)
 
 
-def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
-    env = JuggleEnv(duration=8.0)
+def make_collector(seed: int = 0, total: int = 8, common_seeds: bool = False) -> DPSCollector:
+    env = JuggleEnv(duration=8.0, reset_noise=0.01)
     return DPSCollector(
         CommandSpace(env),
         CommandRollouts(env, nthread=2),
@@ -54,6 +54,7 @@ def make_collector(seed: int = 0, total: int = 8) -> DPSCollector:
         frames_per_batch=4,
         total_frames=total,
         seed=seed,
+        common_seeds=common_seeds,
     )
 
 
@@ -76,10 +77,25 @@ def test_collector_yields_batches_of_rolled_out_samples():
     assert collector.frames == 8 and len(collector) == 2
     # the counts belong to the samples: re-evaluating them gives the same throws
     commands = [params_to_command(theta) for theta in batch["params"]]
-    with CommandRollouts(JuggleEnv(duration=8.0), nthread=2) as rollouts:
+    with CommandRollouts(JuggleEnv(duration=8.0, reset_noise=0.01), nthread=2) as rollouts:
         results = rollouts.evaluate(commands, batch["seed"].tolist())
     assert results.throws.tolist() == batch["throws"].tolist()
     assert len(set(batch["params"][:, 0].tolist())) == 4  # four different samples
+
+
+def test_common_seeds_give_every_sample_of_a_batch_the_same_start():
+    collector = make_collector(total=-1, common_seeds=True)
+    first, second = collector.collect_batch(), collector.collect_batch()
+    target = first["params"][0]  # one θ four times: from one start, four equal scores
+    collector.update_policy_weights_(SearchDistribution.diagonal(target, torch.zeros(10)))
+    same = collector.collect_batch()
+    collector.shutdown()
+    assert len(set(first["seed"].tolist())) == len(set(second["seed"].tolist())) == 1
+    assert first["seed"][0] != second["seed"][0]
+    assert len(set(same["throws"].tolist())) == 1
+    independent = make_collector(total=4)
+    assert len(set(independent.collect_batch()["seed"].tolist())) == 4
+    independent.shutdown()
 
 
 def test_update_policy_weights_sets_the_sampling_distribution():
@@ -171,6 +187,18 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     assert times[-1] == pytest.approx(8.0)  # the best episode was recorded whole
 
 
+def test_a_run_deploying_the_mean_writes_it_and_checks_it(tmp_path):
+    cfg = train_config(*SHORT, "algo.update=cmaes", "algo.deploy=mean", "algo.episodes=2")
+    metrics, training = run_training(cfg, tmp_path)
+    mean = training.space.project(training.collector.distribution.mean)
+    deployed = load_command(tmp_path / "mean_command.yaml")
+    assert deployed == training.space.decode(mean) != training.space.decode(training.best.params)
+    assert metrics["deploys"] == load_checkpoint(tmp_path)["deploys"] == "mean_command.yaml"
+    assert (tmp_path / "best_command.yaml").is_file()  # the best is kept all the same
+    nominal = run_episode(JuggleEnv(duration=8.0), CommandPolicy(deployed), seed=0).throws
+    assert metrics["noise_check"]["nominal_throws"] == nominal
+
+
 def test_train_script_runs_and_resumes_from_its_run_directory(tmp_path):
     first = run_train(*SHORT, "algo.episodes=1", f"hydra.run.dir={tmp_path}")
     assert first.returncode == 0, first.stderr
@@ -204,6 +232,7 @@ def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
         ("algo.lead_in=-1", "error: algo.lead_in=-1 is out of range"),
         ("algo.space=joint", "error: algo.space='joint' is not available; choose one of"),
         ("algo.reset_noise=0.5", "error: algo.reset_noise=0.5 is out of range"),
+        ("algo.deploy=last", "error: algo.deploy='last': use best or mean"),
         ("resume=nowhere", "error: resume: no checkpoint at nowhere"),
     ],
 )

@@ -24,7 +24,8 @@ from jugglerl.policies.feedback import (
     save_feedback_policy,
 )
 
-BEST_POLICY = "best_policy.yaml"
+#: A search's policy files: ``best_policy.yaml`` (its best roll-out) and ``mean_policy.yaml``.
+POLICY_FILE = "{role}_policy.yaml"
 
 
 def gains_from_params(params: torch.Tensor, **fixed: float) -> FeedbackGains:
@@ -93,10 +94,11 @@ class ClosedLoopSpace:
     def policy(self, params: torch.Tensor, env: gym.Env):
         return self.build(self.decode(params), env)
 
-    def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
+    def save(self, params: torch.Tensor, run_dir: Path, name: str, role: str = "best") -> str:
         balls = self.cfg.env.get("balls", 1)
-        save_feedback_policy(run_dir / BEST_POLICY, *self.decode(params), name, balls)
-        return BEST_POLICY
+        file = POLICY_FILE.format(role=role)
+        save_feedback_policy(run_dir / file, *self.decode(params), name, balls)
+        return file
 
     def describe(self, params: torch.Tensor, name: str) -> dict:
         command, gains = self.decode(params)

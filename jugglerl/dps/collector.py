@@ -8,7 +8,9 @@ policies in worker processes) and yields a ``[frames_per_batch]`` TensorDict:
 - ``params`` (float64, ``[n]``): θ, laid out as the space defines it;
 - ``return`` (float64): throws in the roll-out (the paper's reward); ``throws``: the same as int64;
 - ``time_to_drop`` (float64): seconds until the ball fell below the drop height, NaN if never;
-- ``seed`` (int64): the env reset seed of the roll-out;
+- ``seed`` (int64): the env reset seed of the roll-out (with ``common_seeds``, one for the whole
+  batch: every sample then meets the same starts and the same noise, so their ranking compares
+  the samples rather than their luck);
 - ``("collector", "iteration")`` (int64): index of the batch.
 
 A "frame" here is one roll-out (one whole episode): ``total_frames`` is the roll-out budget.
@@ -61,6 +63,7 @@ class DPSCollector(BaseCollector):
         frames_per_batch: roll-outs per iteration (the paper's N).
         total_frames: roll-out budget; ``-1`` runs until stopped.
         seed: seeds the sampling RNG.
+        common_seeds: every sample of a batch rolls out with the batch's one reset seed.
     """
 
     def __init__(
@@ -72,6 +75,7 @@ class DPSCollector(BaseCollector):
         frames_per_batch: int,
         total_frames: int = -1,
         seed: int = 0,
+        common_seeds: bool = False,
     ):
         super().__init__()
         if frames_per_batch < 1:
@@ -81,6 +85,7 @@ class DPSCollector(BaseCollector):
         self.distribution = distribution
         self.frames_per_batch = self.requested_frames_per_batch = frames_per_batch
         self.total_frames = total_frames
+        self.common_seeds = common_seeds
         self.generator = torch.Generator()
         self.set_seed(seed)
         self.iteration = 0
@@ -96,7 +101,8 @@ class DPSCollector(BaseCollector):
         if self.total_frames >= 0:
             count = min(count, self.total_frames - self.frames)
         params = self.distribution.sample(count, self.generator, self.space)
-        seeds = torch.randint(SEED_BOUND, (count,), generator=self.generator)
+        draws = 1 if self.common_seeds else count
+        seeds = torch.randint(SEED_BOUND, (draws,), generator=self.generator).repeat(count // draws)
         candidates = [self.space.decode(theta) for theta in params]
         results = self.rollouts.evaluate(candidates, seeds.tolist())
         throws = torch.as_tensor(results.throws, dtype=torch.int64)

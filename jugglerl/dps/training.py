@@ -8,9 +8,13 @@ log, checkpoint.
 - ``checkpoint.pt`` after every episode (atomically): collector state (distribution, RNG,
   counters), update-rule state, best θ, history, the config and the logger's recording id;
 - the best θ as a policy file whenever the best improves (``best_command.yaml`` or
-  ``best_policy.yaml``: ``scripts/evaluate.py policy=<run dir>`` replays it);
+  ``best_policy.yaml``), and with ``algo.deploy=mean`` the search distribution's mean θ after
+  every episode (``mean_command.yaml`` or ``mean_policy.yaml``); the run deploys the one
+  ``algo.deploy`` names (``scripts/evaluate.py policy=<run dir>`` replays it). The best is the
+  luckiest roll-out of the search; when every roll-out is noisy (action noise among
+  ``algo.conditions``), the mean, which every batch moved, is the steadier policy;
 - ``metrics.json``: the best θ's score, roll-outs to reach given throw counts, the history per
-  episode and, at the end, the best θ under reset noise.
+  episode and, at the end, the deployed θ under reset noise.
 
 Metrics go to the rerun logger under ``dps/`` on the ``step`` timeline (roll-outs so far); each
 time the best improves its episode is replayed in the env and recorded under ``best/<roll-outs>``.
@@ -38,6 +42,7 @@ from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
 from jugglerl.run_files import METRICS, write_json
 
+DEPLOYS = ("best", "mean")
 #: Throw counts whose first roll-out is reported: the paper's DPS best, and this project's bar.
 MILESTONES = (39, 60)
 
@@ -63,6 +68,8 @@ class SearchTraining:
         algo = cfg.algo
         if algo.episodes < 1 or algo.rollouts < 1:
             raise ValueError("algo.episodes and algo.rollouts must be >= 1")
+        if algo.deploy not in DEPLOYS:
+            raise ValueError(f"algo.deploy={algo.deploy!r}: use {' or '.join(DEPLOYS)}")
         self.space = SPACES.get(algo.space)(cfg)
         self.update = make_update(algo, self.space.stds)
         self.collector = DPSCollector(
@@ -72,11 +79,12 @@ class SearchTraining:
             frames_per_batch=algo.rollouts,
             total_frames=algo.episodes * algo.rollouts,
             seed=cfg.seed,
+            common_seeds=algo.common_seeds,
         )
         self.best = Best(self.space.start)
         self.history: list[dict] = []  # one record per episode
         self.recording_id: str | None = None
-        self.deploys: str | None = None  # the policy file of the best θ, once written
+        self.deploys: str | None = None  # the policy file algo.deploy names, once written
         if state is not None:
             self.load_state_dict(state)
 
@@ -97,8 +105,12 @@ class SearchTraining:
                 improved = self._learn(batch)
                 self._log(logger, self.history[-1])
                 if improved:
-                    self.deploys = self.space.save(self.best.params, self.run_dir, self.best_name)
+                    best = self.space.save(self.best.params, self.run_dir, self.best_name)
+                    self.deploys = best if self.cfg.algo.deploy == "best" else self.deploys
                     self._record_best(logger)
+                if self.cfg.algo.deploy == "mean":
+                    name = f"{self.cfg.algo.name}_mean_{self.collector.iteration}"
+                    self.deploys = self.space.save(self.deployed, self.run_dir, name, "mean")
                 save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
                 bar.set_postfix(best=self.best.throws, mean=f"{batch['return'].mean():.1f}")
                 bar.update()
@@ -161,6 +173,13 @@ class SearchTraining:
         logger.send_blueprint(training_blueprint(SEARCH_CURVES, root, self.cfg.env.threshold))
 
     @property
+    def deployed(self) -> torch.Tensor:
+        """θ of the policy ``algo.deploy`` names: the best roll-out's or the (projected) mean."""
+        if self.cfg.algo.deploy == "best":
+            return self.best.params
+        return self.space.project(self.collector.distribution.mean)
+
+    @property
     def best_name(self) -> str:
         return f"{self.cfg.algo.name}_best_{self.best.throws}"
 
@@ -174,7 +193,7 @@ class SearchTraining:
         line = self.space.headline(metrics)
         if check:
             line += (
-                f"; from the standard start: {check['nominal_throws']}; with"
+                f"; {metrics['deploys']} from the standard start: {check['nominal_throws']}; with"
                 f" {check['reset_noise']} m start noise: {check['mean_throws']:.1f} on average"
                 f" over {len(check['seeds'])} seeds ({check['fraction_of_best']:.0%})"
             )
@@ -182,7 +201,7 @@ class SearchTraining:
 
     # --- results --------------------------------------------------------------------------
     def final_metrics(self) -> dict:
-        """Best θ, milestones, history, and the best θ under reset noise."""
+        """Best θ, milestones, history, and the deployed θ under reset noise."""
         reached = {}
         for record in self.history:
             for n, rollout in record["first_rollout_with"].items():
@@ -195,6 +214,7 @@ class SearchTraining:
             "best_found_at_rollout": self.best.rollout,
             "best_time_to_drop": None if math.isnan(drop) else drop,
             "rollouts": self.collector.frames,
+            "deploys": self.deploys,
             "first_rollout_with": {n: reached.get(str(n)) for n in MILESTONES},
             **self.space.describe(self.best.params, self.best_name),
             "history": self.history,
@@ -204,17 +224,17 @@ class SearchTraining:
         return metrics
 
     def noise_check(self) -> dict:
-        """The best θ's throws from ``noise_check.seeds`` starts with ball offset noise, and
+        """The deployed θ's throws from ``noise_check.seeds`` starts with ball offset noise, and
         their fraction of its throws from the standard start."""
         check = self.cfg.algo.noise_check
-        best = self.space.decode(self.best.params)
+        deployed = self.space.decode(self.deployed)
         seeds = list(range(check.seeds))
         with self.space.rollouts(check.reset_noise) as rollouts:
-            throws = rollouts.evaluate([best] * len(seeds), seeds).throws
+            throws = rollouts.evaluate([deployed] * len(seeds), seeds).throws
         # the standard start is replayed: the best score came from one roll-out's own start
         # (algo.reset_noise) or sums several conditions (algo=feedback)
         with self.space.rollouts(0.0) as rollouts:
-            nominal = int(rollouts.evaluate([best], [0]).throws[0])
+            nominal = int(rollouts.evaluate([deployed], [0]).throws[0])
         return {
             "reset_noise": check.reset_noise,
             "seeds": seeds,

@@ -22,7 +22,7 @@ import numpy as np
 import torch
 from omegaconf import DictConfig
 
-from jugglerl.dps.closed_loop_space import BEST_POLICY, ClosedLoopSpace
+from jugglerl.dps.closed_loop_space import POLICY_FILE, ClosedLoopSpace
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces import SPACES
 from jugglerl.policies.throw_catch import (
@@ -106,9 +106,10 @@ class ThrowCatchSpace(ClosedLoopSpace):
     def build(self, candidate: ThrowCatch, env: gym.Env) -> ThrowCatchPolicy:
         return ThrowCatchPolicy(candidate, env)
 
-    def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
-        save_throw_catch_policy(run_dir / BEST_POLICY, self.decode(params), name)
-        return BEST_POLICY
+    def save(self, params: torch.Tensor, run_dir: Path, name: str, role: str = "best") -> str:
+        file = POLICY_FILE.format(role=role)
+        save_throw_catch_policy(run_dir / file, self.decode(params), name)
+        return file
 
     def describe(self, params: torch.Tensor, name: str) -> dict:
         best = asdict(self.decode(params))

@@ -31,7 +31,8 @@ from jugglerl.policies.command import CommandPolicy
 from jugglerl_envs.juggle import MAX_RESET_NOISE
 from jugglerl_envs.validation import check_number
 
-BEST_COMMAND = "best_command.yaml"
+#: A search's command files: ``best_command.yaml`` (its best roll-out) and ``mean_command.yaml``.
+COMMAND_FILE = "{role}_command.yaml"
 
 
 @SPACES.register("via_points")
@@ -87,9 +88,10 @@ class ViaPointSpace:
     def policy(self, params: torch.Tensor, env: gym.Env) -> CommandPolicy:
         return CommandPolicy(self.decode(params))
 
-    def save(self, params: torch.Tensor, run_dir: Path, name: str) -> str:
-        save_command(self.decode(params, name), run_dir / BEST_COMMAND)
-        return BEST_COMMAND
+    def save(self, params: torch.Tensor, run_dir: Path, name: str, role: str = "best") -> str:
+        file = COMMAND_FILE.format(role=role)
+        save_command(self.decode(params, name), run_dir / file)
+        return file
 
     def describe(self, params: torch.Tensor, name: str) -> dict:
         return {"best_command": self.decode(params, name).to_dict()}
