@@ -42,6 +42,7 @@ from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
 from jugglerl.run_files import METRICS, write_json
 
+#: What a run may deploy (``algo.deploy``): its best roll-out's θ or the distribution's mean.
 DEPLOYS = ("best", "mean")
 #: Throw counts whose first roll-out is reported: the paper's DPS best, and this project's bar.
 MILESTONES = (39, 60)
@@ -106,7 +107,8 @@ class SearchTraining:
                 self._log(logger, self.history[-1])
                 if improved:
                     best = self.space.save(self.best.params, self.run_dir, self.best_name)
-                    self.deploys = best if self.cfg.algo.deploy == "best" else self.deploys
+                    if self.cfg.algo.deploy == "best":
+                        self.deploys = best
                     self._record_best(logger)
                 if self.cfg.algo.deploy == "mean":
                     name = f"{self.cfg.algo.name}_mean_{self.collector.iteration}"
