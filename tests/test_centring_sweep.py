@@ -17,7 +17,7 @@ def test_it_prints_a_row_per_pair_of_gains():
     result = sweep("--gains", "0:0,0.02:0.015", "--seeds", "1", "--duration", "6", "--workers", "1")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.strip().splitlines()
-    assert lines[0] == "two_balls, 2 ball(s), 6 s; mean throws over env seeds 1000-1000"
+    assert lines[0] == "two_balls_searched, 2 ball(s), 6 s; mean throws over env seeds 1000-1000"
     rows = [line.split() for line in lines[2:]]
     assert [row[:2] for row in rows] == [["0.000", "0.000"], ["0.020", "0.015"]]
     assert all(int(row[2]) >= 3 and len(row) == 7 for row in rows)  # a throw every 1.43 s

@@ -38,7 +38,8 @@ balls it juggles, which the env must then have (searches write it when ``env.bal
 Shipped: ``closed_loop_gains`` (gains searched for ``dps_best``), ``closed_loop_tolerant`` and
 ``closed_loop`` (command and gains searched together, ``algo=closed_loop``, under growing
 imprecision), ``closed_loop_centred`` (``closed_loop`` centring the ball it holds), and
-``two_balls`` (the same search with two balls, from ``two_balls_start``, centring too).
+``two_balls_searched`` (the same search with two balls, from ``two_balls_start``, centring too)
+and ``two_balls`` (searched from it under more action noise).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Which in-cup centring gains keep a feedback policy's throws under imprecision: a grid.
 
-    python scripts/studies/centring_sweep.py [--policy two_balls] [--balls 2] \
+    python scripts/studies/centring_sweep.py [--policy two_balls_searched] [--balls 2] \
         [--gains 0:0,0.02:0.015,...] [--seeds 30] [--first-seed 1000] [--duration 120] \
         [--workers 0]
 
@@ -55,7 +55,9 @@ def gain_pairs(text: str) -> list[tuple[float, float]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--policy", default="two_balls", help="a feedback policy: name or file")
+    parser.add_argument(
+        "--policy", default="two_balls_searched", help="a feedback policy: name or file"
+    )
     parser.add_argument("--balls", type=int, default=2)
     parser.add_argument("--gains", type=gain_pairs, default=gain_pairs(GRID))
     parser.add_argument("--seeds", type=int, default=30)
