@@ -59,9 +59,10 @@ warning: ``info["physics_error"]`` says which; the env never raises). Truncated 
 ``max_consecutive_catches`` (the longest streak of one ball), ``ball_height`` (m, the first
 ball), ``ball_heights`` (every ball), ``in_cup`` (bool, the first ball), episode maxima
 sampled every env step: ``max_cup_height`` (the cup's throat, m; a counted throw rose at least
-``threshold`` minus this above the cup) and ``peak_joint_speed`` (each actuated joint, rad/s;
-3 or 4 values); ``time`` (s), ``kicks`` (so far), ``physics_error``
-("" if fine).
+``threshold`` minus this above the cup), ``peak_joint_speed`` (each actuated joint, rad/s;
+3 or 4 values) and ``max_balls_in_cup`` (the most balls inside the cone at once: balls pass
+through each other, so two can share the cup, which no real cup allows); ``time`` (s),
+``kicks`` (so far), ``physics_error`` ("" if fine).
 
 ## Perturbations (for robustness tests; off by default, see ``jugglerl_envs.perturbations``)
 ``reset_noise`` (ball start offset), ``ball_mass``, ``ball_radius``, ``servo_gain`` (scales the
@@ -249,6 +250,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         self._peak_joint_speed = np.zeros(self._servos)
         self._max_cup_height = float(self.cup_position()[2])
         self._measure_balls()
+        self._max_balls_in_cup = sum(self._in_cup)
         for ball, events in enumerate(self._events):
             events.reset(self._heights[ball], self._clear_of_cup[ball])
         self._physics_error = ""
@@ -288,6 +290,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         speeds = np.abs(self.data.qvel[self._arm_qvel])
         self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
         self._max_cup_height = max(self._max_cup_height, float(self.cup_position()[2]))
+        self._max_balls_in_cup = max(self._max_balls_in_cup, sum(self._in_cup))
 
         obs = self._get_obs()
         reward = self._reward(self, throws)
@@ -371,6 +374,7 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
             "in_cup": self._in_cup[0],
             "peak_joint_speed": self._peak_joint_speed.copy(),
             "max_cup_height": self._max_cup_height,
+            "max_balls_in_cup": self._max_balls_in_cup,
             "time": float(self.data.time),
             "kicks": self._kick_count,
             "physics_error": self._physics_error,

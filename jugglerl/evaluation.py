@@ -24,6 +24,7 @@ class EpisodeMetrics:
     max_cup_height: float = 0.0  # m, the cup's throat at its highest
     peak_joint_speed: tuple[float, ...] = ()  # rad/s, per actuated joint
     throws_per_ball: tuple[int, ...] = ()  # in the env's ball order; sums to ``throws``
+    max_balls_in_cup: int = 0  # the most balls inside the cup at once (several share it: > 1)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -62,6 +63,7 @@ def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episod
         max_cup_height=round(info["max_cup_height"], 6),
         peak_joint_speed=tuple(round(float(v), 6) for v in info["peak_joint_speed"]),
         throws_per_ball=tuple(int(n) for n in info["throws_per_ball"]),
+        max_balls_in_cup=int(info["max_balls_in_cup"]),
     )
 
 

@@ -24,6 +24,15 @@ class PolicyFileError(ValueError):
     """A policy file that cannot be used; the message says what and where."""
 
 
+def check_balls(data: dict, balls: int) -> None:
+    """Refuse a policy file stating ``balls`` (the number it juggles) other than the env's."""
+    if "balls" in data and data["balls"] != balls:
+        raise PolicyFileError(
+            f"policy {data['name']} juggles balls={data['balls']} but the env has {balls}: run"
+            f" it with env.balls={data['balls']}"
+        )
+
+
 def shipped_folder() -> Path:
     return Path(str(resources.files(SHIPPED_PACKAGE).joinpath(SHIPPED_FOLDER)))
 

@@ -6,10 +6,11 @@ import pytest
 from closed_loop_episode import RECORDED, play
 
 import jugglerl  # noqa: F401  (registers the id)
-from jugglerl.commands import CommandError, load_command
+from jugglerl.commands import load_command
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.feedback import LOCK_HEIGHT, FeedbackGains, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
+from jugglerl.policy_files import PolicyFileError
 from jugglerl_envs import JuggleEnv
 
 
@@ -71,6 +72,20 @@ def test_either_ball_dropped_ends_the_episode():
     env.close()
 
 
+def test_balls_sharing_the_cup_are_reported():
+    """Balls pass through each other, so two can sit in the cup at once; ``max_balls_in_cup``
+    says so (the searches refuse such episodes, ``algo.limits.max_balls_in_cup``)."""
+    for spacing, most in ((0.2, 2), (2.0, 1)):  # the second lands on the first; or after it
+        env = JuggleEnv(balls=2, ball_spacing=spacing, duration=1.4)
+        env.reset(seed=0)
+        done = False
+        while not done:
+            _, _, terminated, truncated, info = env.step(hold_arm(env))
+            done = terminated or truncated
+        assert info["max_balls_in_cup"] == most and not terminated
+        env.close()
+
+
 def test_an_episode_of_two_balls_reports_throws_per_ball():
     env = JuggleEnv(balls=2, duration=6.0)
     metrics = run_episode(env, load_policy("closed_loop", env), seed=0)
@@ -123,6 +138,6 @@ def test_the_shipped_two_ball_juggler_keeps_both_balls_up():
     assert metrics.time_to_drop is None and min(metrics.throws_per_ball) >= 8
     env.close()
     with pytest.raises(
-        CommandError, match="juggles balls=2 but the env has 1: run it with env.balls=2"
+        PolicyFileError, match="juggles balls=2 but the env has 1: run it with env.balls=2"
     ):
         load_policy("two_balls", JuggleEnv())

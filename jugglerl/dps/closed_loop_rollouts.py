@@ -7,8 +7,10 @@ and run as episodes on an ``EpisodePool`` (worker processes, or Ray tasks): once
 conditions, so the search prefers candidates that juggle in all of them.
 
 ``limits`` keeps the throws honest: an episode in which the cup's throat rose above
-``max_cup_height`` (m) or a joint turned faster than ``max_joint_speed`` (rad/s) scores no
-throws, so a search cannot buy throws by lifting the cup or by outrunning the arm.
+``max_cup_height`` (m), a joint turned faster than ``max_joint_speed`` (rad/s) or more than
+``max_balls_in_cup`` balls sat in the cup at once scores no throws, so a search cannot buy
+throws by lifting the cup, by outrunning the arm or, the balls passing through each other in
+the scene, by juggling two as one.
 """
 
 from __future__ import annotations
@@ -25,13 +27,16 @@ from jugglerl.dps.rollouts import RolloutResults
 from jugglerl.evaluation import EpisodeMetrics
 from jugglerl.policies import Policy
 
-LIMIT_KEYS = ("max_cup_height", "max_joint_speed")
+LIMIT_KEYS = ("max_cup_height", "max_joint_speed", "max_balls_in_cup")
 
 
 def within_limits(metrics: EpisodeMetrics, limits: Mapping[str, float | None]) -> bool:
-    """Whether an episode kept the cup and the joints within ``limits`` (``None``: no limit)."""
-    cup, speed = (limits.get(key) for key in LIMIT_KEYS)
+    """Whether an episode kept the cup, the joints and the balls in the cup within ``limits``
+    (``None``: no limit)."""
+    cup, speed, shared = (limits.get(key) for key in LIMIT_KEYS)
     if cup is not None and metrics.max_cup_height > cup:
+        return False
+    if shared is not None and metrics.max_balls_in_cup > shared:
         return False
     return speed is None or max(metrics.peak_joint_speed, default=0.0) <= speed
 

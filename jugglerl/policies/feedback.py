@@ -52,7 +52,7 @@ import gymnasium as gym
 import numpy as np
 
 from jugglerl.commands import CommandError, ViaPointCommand, command_from_dict
-from jugglerl.policy_files import write_policy_file
+from jugglerl.policy_files import check_balls, write_policy_file
 from jugglerl_envs.actions import ctrl_to_action
 
 #: m above the cup at which the falling ball locks the command's phase.
@@ -189,12 +189,7 @@ def feedback_policy_from_dict(data: dict, source: str, env: gym.Env) -> Feedback
         raise CommandError(
             f"{source}: expected the keys kind, name, command, feedback (and optionally balls)"
         )
-    balls = env.unwrapped.balls
-    if "balls" in data and data["balls"] != balls:
-        raise CommandError(
-            f"policy {data['name']} juggles balls={data['balls']} but the env has {balls}: run"
-            f" it with env.balls={data['balls']}"
-        )
+    check_balls(data, env.unwrapped.balls)
     command = command_from_dict(data["command"], f"{source}: command")
     gains = data["feedback"]
     allowed = {*PARAM_NAMES, *FIXED_NAMES}
