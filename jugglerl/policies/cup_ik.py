@@ -50,18 +50,29 @@ class CupIK:
         mujoco.mj_kinematics(self.model, self.data)
         return self.data.site_xpos[self._site].copy()
 
-    def solve(self, target: np.ndarray, start: np.ndarray) -> np.ndarray:
+    def solve(
+        self, target: np.ndarray, start: np.ndarray, level: float | None = None
+    ) -> np.ndarray:
         """Joint angles (pan, lift, elbow; rad) putting the throat at ``target`` (m), from
-        ``start``; the nearest reachable pose when ``target`` is out of reach."""
+        ``start``; the nearest reachable pose when ``target`` is out of reach. With ``level``
+        (rad), lift + elbow stays at it, which keeps the cup's tilt, and only the throat's
+        horizontal position is placed: its height is wherever that leaves it."""
         joints = np.array(start, dtype=float)
+        if level is not None:
+            joints[2] = level - joints[1]
+        placed = 3 if level is None else 2
         for _ in range(self.iterations):
-            error = target - self.throat(joints)
+            error = (target - self.throat(joints))[:placed]
             if error @ error < TOLERANCE:
                 break
             mujoco.mj_comPos(self.model, self.data)
             mujoco.mj_jacSite(self.model, self.data, self._jacobian, None, self._site)
-            jac = self._jacobian[:, self._dofs]
-            step = np.linalg.solve(jac.T @ jac + DAMPING * np.eye(len(joints)), jac.T @ error)
-            joints += step * min(1.0, MAX_STEP / max(np.abs(step).max(), 1e-12))
-            joints = np.clip(joints, self.low, self.high)
+            jac = self._jacobian[:placed, self._dofs]
+            if level is not None:  # the unknowns: pan and lift, the elbow following the lift
+                jac = np.stack([jac[:, 0], jac[:, 1] - jac[:, 2]], axis=1)
+            step = np.linalg.solve(jac.T @ jac + DAMPING * np.eye(placed), jac.T @ error)
+            step *= min(1.0, MAX_STEP / max(np.abs(step).max(), 1e-12))
+            if level is not None:
+                step = np.array([step[0], step[1], -step[1]])
+            joints = np.clip(joints + step, self.low, self.high)
         return joints

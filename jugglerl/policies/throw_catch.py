@@ -32,11 +32,33 @@ but reacts to the ball, in four modes:
   ``rest`` along a smoothstep over ``carry`` seconds, then settle.
 
 A throw is repeatable because it starts from a settled ball; a catch forgives because the cup
-goes where the ball is. The throw's knots assume the wrist lock they were made with, so the
-env's ``wrist_angles`` must be the policy's (a one-line error otherwise). A policy file is YAML
-of ``kind: throw_catch`` with the ``ThrowCatch`` fields and, optionally, ``env``: the env preset
-it was made for (``configs/env/``), which that error names. Shipped: ``earth_expert`` (made by
-hand) and ``earth_juggler`` (searched from it by ``algo=throw_catch``), both ``env: earth``.
+goes where the ball is.
+
+**Low gravity** (the paper preset, g = -2 m/s²): the ball sits loosely in the cone and bounces
+out of a tilted one. With ``level`` (rad) the catch holds lift + elbow at that sum, which keeps
+the cup's tilt (upright, for the paper's wrist lock, at 0.429), and places only the throat's
+horizontal position (its height is where that pose puts it); once the ball is down in the cup the
+cup stays where it is, where a bouncing ball comes back down, rather than following it. With
+``still`` (s) the arm holds still at ``rest`` that long before a throw, so that a ball carried
+there stops rolling first.
+
+**Several balls** (``env.balls`` > 1, with ``lead``): the cup deals with one ball at a time,
+holding, throwing, catching or carrying it; every other ball is in flight. A held ball is thrown
+once the next ball down is at most ``lead`` seconds from its catch, so the throws alternate, each
+landing timing the throw of the other. The throw hands the catch to the ball that comes down
+first, and the cup must be empty when it arrives: a ball caught but not yet back at rest when the
+next one is due is thrown from where it is, the knots shifted by the setpoints' offset from
+``rest``. The episode starts in catch (the second ball is only 0.9 s behind the first at the
+paper preset: no time to settle at home first). With one ball, or without ``lead``, the rules
+above are the one-ball rules, and ``earth_juggler`` plays exactly as before.
+
+The throw's knots assume the wrist lock they were made with, so the env's ``wrist_angles`` must
+be the policy's (a one-line error otherwise). A policy file is YAML of ``kind: throw_catch`` with
+the ``ThrowCatch`` fields and, optionally, ``env``: the env preset it was made for
+(``configs/env/``), which that error names, and ``balls``, the number it juggles, which the env
+must then have. Shipped: ``earth_expert`` (made by hand) and ``earth_juggler`` (searched from it
+by ``algo=throw_catch``), both ``env: earth``; ``two_balls_throw`` (``env: paper``, two balls;
+searched from ``two_balls_throw_start``).
 """
 
 from __future__ import annotations
@@ -51,7 +73,7 @@ import numpy as np
 from jugglerl.commands import CommandError
 from jugglerl.policies.cup_ik import CupIK
 from jugglerl.policies.flight_fit import FlightFit
-from jugglerl.policy_files import write_policy_file
+from jugglerl.policy_files import check_balls, write_policy_file
 from jugglerl_envs.actions import ctrl_to_action
 
 KIND = "throw_catch"
@@ -99,6 +121,9 @@ class ThrowCatch:
     settle: float  # rest of the ball in the cup before each throw
     carry: float  # duration of the move from the catch back to rest
     apex: float | None = None  # the flight's top the throw holds (ball centre, m); None: open loop
+    lead: float | None = None  # s before the next ball's catch a held ball is thrown (balls > 1)
+    level: float | None = None  # rad: lift + elbow held at the catch (None: the catch may tilt)
+    still: float | None = None  # s the arm holds still at rest before a throw (None: no wait)
 
     def __post_init__(self):
         for name in ("rest", "wrist_angles"):
@@ -118,11 +143,19 @@ class ThrowCatch:
                 raise CommandError("apex must be a positive height (m) or absent")
             if len(knots) < 2:
                 raise CommandError("apex needs a throw of at least 2 knots (push, then brake)")
+        if self.lead is not None and not (math.isfinite(self.lead) and self.lead > 0):
+            raise CommandError("lead must be a positive number of seconds or absent")
+        if self.level is not None and not math.isfinite(self.level):
+            raise CommandError("level must be an angle (rad) or absent")
+        if self.still is not None and not (math.isfinite(self.still) and self.still >= 0):
+            raise CommandError("still must be a number of seconds >= 0 or absent")
 
 
 FIELD_NAMES = tuple(f.name for f in fields(ThrowCatch))
-#: what a file may leave out: ``env`` and the fields with a default
-OPTIONAL_KEYS = ("env", *(f.name for f in fields(ThrowCatch) if f.default is None))
+#: the fields that are one number each
+SCALAR_KEYS = ("catch_height", "settle", "carry", "apex", "lead", "level", "still")
+#: what a file may leave out: ``env``, ``balls`` and the fields with a default
+OPTIONAL_KEYS = ("env", "balls", *(f.name for f in fields(ThrowCatch) if f.default is None))
 
 
 class ThrowCatchPolicy:
@@ -146,57 +179,82 @@ class ThrowCatchPolicy:
         self._home = np.array(unwrapped.home, dtype=float)
         self._knots = np.asarray(params.knots, dtype=float)
         self._ik = CupIK(params.wrist_angles)
-        self._flight = FlightFit(FLIGHT_FORGET)
+        self._balls = [unwrapped.ball_slice(ball) for ball in range(unwrapped.balls)]
+        self._flights = [FlightFit(FLIGHT_FORGET) for _ in self._balls]
         self.reset()
 
     def reset(self) -> None:
-        self.mode = "settle"
+        self.mode = "catch" if len(self._balls) > 1 else "settle"
         self._clock = 0.0  # s in the current mode
-        self._rested = 0.0  # s the ball has rested in the cup without a break
-        self._slosh = np.zeros(3)  # m/s, the ball's velocity relative to the cup, filtered
+        self._flight_clock = 0.0  # s since the flight fits were last reset
+        for flight in self._flights:
+            flight.reset()
+        self._ball = 0  # the ball the cup deals with: held, thrown, caught or carried
+        balls = len(self._balls)
+        self._rested = np.zeros(balls)  # s each ball has rested in the cup without a break
+        self._slosh = np.zeros((balls, 3))  # m/s, each ball relative to the cup, filtered
         self._target = self._home.copy()  # setpoints (pan, lift, elbow), rad
         self._carry_from = self._home.copy()
+        self._shift = np.zeros(3)  # rad: the setpoints' offset from rest where the throw began
         self._set_push(0)
-        self._top = -math.inf  # m: the highest the ball has been in the current flight
+        self._top = np.full(balls, -math.inf)  # m: each ball's highest in its current flight
 
     def act(self, observation: np.ndarray, time: float) -> np.ndarray:
-        ball, ball_velocity = observation[6:9], observation[9:12]
         cup, cup_velocity = observation[12:15], observation[15:18]
-        relative = ball - cup
-        self._slosh += SLOSH_FILTER * (ball_velocity - cup_velocity - self._slosh)
-        resting = (
-            math.hypot(relative[0], relative[1]) < REST_RADIUS
-            and 0.0 < relative[2] < REST_HEIGHT
-            and np.linalg.norm(self._slosh) < REST_SPEED
-        )
-        self._rested = self._rested + self._dt if resting else 0.0
+        seen = [observation[where] for where in self._balls]  # position, velocity per ball
+        flying = [state[2] - cup[2] > CLEAR_HEIGHT for state in seen]
+        for ball, state in enumerate(seen):
+            relative = state[:3] - cup
+            self._slosh[ball] += SLOSH_FILTER * (state[3:] - cup_velocity - self._slosh[ball])
+            resting = (
+                math.hypot(relative[0], relative[1]) < REST_RADIUS
+                and 0.0 < relative[2] < REST_HEIGHT
+                and np.linalg.norm(self._slosh[ball]) < REST_SPEED
+            )
+            self._rested[ball] = self._rested[ball] + self._dt if resting else 0.0
         self._clock += self._dt
-        if self.mode == "settle" and self._rested >= self.params.settle:
+        self._flight_clock += self._dt
+        coming = self._next_catch(seen, flying)
+        due = coming <= (self.params.lead if self.params.lead is not None else -math.inf)
+        if self.mode in ("catch", "carry") and due and self._rested[self._ball] >= CAUGHT_REST:
+            self._switch("throw")  # from where it is: the next ball must find the cup empty
+        if self.mode == "settle" and self._rested[self._ball] >= self.params.settle:
             if not np.array_equal(self._target, self._rest):
                 self._switch("carry")
-            elif np.abs(observation[:3] - self._rest).max() < POSE_TOLERANCE:
+            elif (
+                np.abs(observation[:3] - self._rest).max() < POSE_TOLERANCE
+                and self._clock >= (self.params.still or 0.0)
+                and (due or self.params.lead is None or coming == math.inf)
+            ):
                 self._switch("throw")
         if self.mode == "throw":
             knot = np.searchsorted(self._knot_ends, self._clock, side="right")
             lift, elbow = self._knots[min(knot, len(self._knots) - 1), 1:]
-            self._target = np.array([self._rest[0], lift, elbow])
-            if relative[2] > CLEAR_HEIGHT and cup_velocity[2] <= 0.0:
+            self._target = np.array([self._rest[0], lift, elbow]) + self._shift
+            if flying[self._ball] and cup_velocity[2] <= 0.0:
                 self._switch("catch")
                 self._target = self._rest.copy()  # the IK's first guess: the throw ends far off
-                self._flight.reset()
-                self._top = -math.inf
+                self._top[self._ball] = -math.inf
+                self._ball = min(  # the next ball down: the one thrown, if no other flies
+                    (ball for ball in range(len(seen)) if flying[ball]),
+                    key=lambda ball: self._landing(seen[ball], None)[0],
+                )
+                for flight in self._flights:
+                    flight.reset()
+                self._flight_clock = 0.0
             elif self._clock > self._knot_ends[-1] + THROW_TIMEOUT:
                 self._switch("carry")
-        if self.mode == "catch":
-            flying = relative[2] > CLEAR_HEIGHT
-            if flying:
-                self._flight.add(self._clock, ball[:2])
-                self._top = max(self._top, float(ball[2]))
-            landing = self._landing(ball, ball_velocity, fitted=flying)
-            self._target = self._ik.solve(landing, self._target)
-            if self._rested >= CAUGHT_REST:
-                self._hold_apex()
-                self._switch("carry")
+        for ball, state in enumerate(seen):
+            if flying[ball]:
+                self._flights[ball].add(self._flight_clock, state[:2])
+                self._top[ball] = max(self._top[ball], float(state[2]))
+        if self.mode == "catch" and (flying[self._ball] or self.params.level is None):
+            fit = self._flights[self._ball] if flying[self._ball] else None
+            _, landing = self._landing(seen[self._ball], fit)
+            self._target = self._ik.solve(landing, self._target, self.params.level)
+        if self.mode == "catch" and self._rested[self._ball] >= CAUGHT_REST:
+            self._hold_apex()
+            self._switch("carry")
         if self.mode == "carry":
             s = min(self._clock / self.params.carry, 1.0)
             s = s * s * (3.0 - 2.0 * s)
@@ -206,13 +264,26 @@ class ThrowCatchPolicy:
                 self._switch("settle")
         return ctrl_to_action(self._target)
 
+    def _next_catch(self, seen: list[np.ndarray], flying: list[bool]) -> float:
+        """s until the next ball in flight, other than the one the cup deals with, comes down to
+        ``catch_height`` (inf if none flies)."""
+        return min(
+            (
+                self._landing(state, None)[0]
+                for ball, state in enumerate(seen)
+                if ball != self._ball and flying[ball]
+            ),
+            default=math.inf,
+        )
+
     def _hold_apex(self) -> None:
         """Lengthen the next throws' push by a control step if the last flight topped out below
         ``apex``, shorten it if above ``apex + APEX_BAND``."""
         apex = self.params.apex
-        if apex is None or not math.isfinite(self._top):
+        top = float(self._top[self._ball])
+        if apex is None or not math.isfinite(top):
             return
-        step = (self._top < apex) - (self._top > apex + APEX_BAND)
+        step = (top < apex) - (top > apex + APEX_BAND)
         self._set_push(int(np.clip(self.push_steps + step, -MAX_PUSH_STEPS, MAX_PUSH_STEPS)))
 
     def _set_push(self, steps: int) -> None:
@@ -227,21 +298,24 @@ class ThrowCatchPolicy:
     def _switch(self, mode: str) -> None:
         if mode == "carry":
             self._carry_from = self._target.copy()
+        if mode == "throw":  # the knots, made for rest, shifted to where the throw starts
+            self._shift = self._target - self._rest
         self.mode = mode
         self._clock = 0.0
 
-    def _landing(self, ball: np.ndarray, velocity: np.ndarray, fitted: bool) -> np.ndarray:
-        """Where the throat must be for the ball, in ballistic flight, to come down into it at
-        ``catch_height`` (m, world frame); its horizontal course from the fitted line while it
-        flies, from the latest sample as it lands (the cup then follows the ball in)."""
+    def _landing(self, ball: np.ndarray, fit: FlightFit | None) -> tuple[float, np.ndarray]:
+        """(s until, where: m, world frame) the throat must be for ``ball`` (its observed position
+        and velocity), in ballistic flight, to come down into it at ``catch_height``; its
+        horizontal course from ``fit``, the line fitted to its flight, if given, else from the
+        latest sample (as it lands: the cup then follows the ball in)."""
         drop = max(ball[2] - self.params.catch_height - SEAT_HEIGHT, 0.0)
-        rise = velocity[2]
+        rise = ball[5]
         flight = (rise + math.sqrt(rise * rise + 2.0 * self._gravity * drop)) / self._gravity
-        position, course = ball[:2], velocity[:2]
-        if fitted:
-            position, course = self._flight.state(self._clock, position, course)
+        position, course = ball[:2], ball[3:5]
+        if fit is not None:
+            position, course = fit.state(self._flight_clock, position, course)
         x, y = position + course * flight
-        return np.array([x, y, self.params.catch_height])
+        return flight, np.array([x, y, self.params.catch_height])
 
 
 # --- files ----------------------------------------------------------------------------------
@@ -266,22 +340,30 @@ def throw_catch_from_dict(data: dict, source: str) -> ThrowCatch:
             rest=tuple(values["rest"].ravel().tolist()),
             wrist_angles=tuple(values["wrist_angles"].ravel().tolist()),
             knots=tuple(map(tuple, np.atleast_2d(values["knots"]).tolist())),
-            **{key: float(values[key]) for key in ("catch_height", "settle", "carry")},
-            apex=float(values["apex"]) if "apex" in values else None,
+            **{key: float(values[key]) for key in SCALAR_KEYS if key in values},
         )
     except (TypeError, ValueError) as error:
         raise CommandError(f"{source}: {error}") from None
 
 
 def throw_catch_policy_from_dict(data: dict, source: str, env: gym.Env) -> ThrowCatchPolicy:
+    """A ``ThrowCatchPolicy`` from a policy file's mapping; ``CommandError`` names a malformed
+    one, ``PolicyFileError`` one that states ``balls`` other than the env's."""
     params = throw_catch_from_dict(data, source)
+    check_balls(data, env.unwrapped.balls)
     return ThrowCatchPolicy(params, env, str(data["name"]), data.get("env"))
 
 
-def save_throw_catch_policy(path: str | Path, params: ThrowCatch, name: str) -> Path:
+def save_throw_catch_policy(
+    path: str | Path, params: ThrowCatch, name: str, balls: int = 1
+) -> Path:
+    """Write a throw_catch policy file; ``balls`` > 1 is stated in it (``balls: N``)."""
     data = {"kind": KIND, "name": name, **asdict(params)}
-    if params.apex is None:
-        del data["apex"]
+    for key in ("apex", "lead", "level", "still"):
+        if data[key] is None:
+            del data[key]
+    if balls > 1:
+        data["balls"] = balls
     data["knots"] = [list(knot) for knot in params.knots]
     for key in ("rest", "wrist_angles"):
         data[key] = list(data[key])

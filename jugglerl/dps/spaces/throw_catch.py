@@ -2,7 +2,8 @@
 ``ThrowCatchPolicy``.
 
 θ is the rest pose's lift and elbow (rad), the throw's knots, flattened (``[duration s, lift
-rad, elbow rad]`` each), then ``catch_height`` (m), ``settle`` (s) and ``carry`` (s), searched
+rad, elbow rad]`` each), then ``catch_height`` (m), ``settle`` (s), ``carry`` (s) and, if the
+start has one (several balls), ``lead`` (s), searched
 from the start policy ``algo.start`` (a ``kind: throw_catch`` file), whose pan and wrist lock
 stay (the search env must lock the wrist as it does). Constraints (samples are clipped):
 ``algo.bounds`` for the durations and the three scalars, the servos' control ranges for the
@@ -33,8 +34,8 @@ from jugglerl.policies.throw_catch import (
 )
 from jugglerl.policy_files import read_policy_file
 
-#: The scalars after the knots, in θ order.
-SCALARS = ("catch_height", "settle", "carry")
+#: The scalars after the knots, in θ order; ``lead`` only when the start has one.
+SCALARS = ("catch_height", "settle", "carry", "lead", "still")
 
 
 @SPACES.register("throw_catch")
@@ -56,19 +57,20 @@ class ThrowCatchSpace(ClosedLoopSpace):
         finally:
             env.close()
         self.knots = len(self.template.knots)
-        bounds = {key: algo.bounds[key] for key in ("duration", *SCALARS)}
-        self.low = torch.tensor(
-            [*low, *[bounds["duration"][0], *low] * self.knots, *(bounds[k][0] for k in SCALARS)],
-            dtype=torch.float64,
-        )
-        self.high = torch.tensor(
-            [*high, *[bounds["duration"][1], *high] * self.knots, *(bounds[k][1] for k in SCALARS)],
-            dtype=torch.float64,
+        self.scalars = tuple(key for key in SCALARS if getattr(self.template, key) is not None)
+        bounds = {key: algo.bounds[key] for key in ("duration", *self.scalars)}
+        self.low, self.high = (
+            torch.tensor(
+                [*ends, *[bounds["duration"][side], *ends] * self.knots]
+                + [bounds[key][side] for key in self.scalars],
+                dtype=torch.float64,
+            )
+            for side, ends in enumerate((low, high))
         )
         if torch.any(self.low > self.high):
             raise ValueError("algo.bounds: every [low, high] needs low <= high")
         start = [*self.template.rest[1:], *(v for knot in self.template.knots for v in knot)]
-        start += [getattr(self.template, key) for key in SCALARS]
+        start += [getattr(self.template, key) for key in self.scalars]
         self.start = torch.tensor(start, dtype=torch.float64)
         problems = self.violations(self.start)
         if problems:
@@ -76,14 +78,14 @@ class ThrowCatchSpace(ClosedLoopSpace):
         std = algo.std
         self.stds = torch.tensor(
             [std.lift, std.elbow, *[std.duration, std.lift, std.elbow] * self.knots]
-            + [std[key] for key in SCALARS],
+            + [std[key] for key in self.scalars],
             dtype=torch.float64,
         )
 
     def _names(self) -> list[str]:
         parts = ("duration", "lift", "elbow")
         knots = [f"knot{i}.{part}" for i in range(self.knots) for part in parts]
-        return ["rest.lift", "rest.elbow", *knots, *SCALARS]
+        return ["rest.lift", "rest.elbow", *knots, *self.scalars]
 
     def project(self, params: torch.Tensor) -> torch.Tensor:
         return torch.clamp(params, self.low, self.high)
@@ -100,7 +102,7 @@ class ThrowCatchSpace(ClosedLoopSpace):
         split = 2 + 3 * self.knots
         rest = (self.template.rest[0], *values[:2])
         knots = tuple(tuple(values[i : i + 3]) for i in range(2, split, 3))
-        scalars = dict(zip(SCALARS, values[split:], strict=True))
+        scalars = dict(zip(self.scalars, values[split:], strict=True))
         return replace(self.template, rest=rest, knots=knots, **scalars)
 
     def build(self, candidate: ThrowCatch, env: gym.Env) -> ThrowCatchPolicy:
@@ -108,7 +110,8 @@ class ThrowCatchSpace(ClosedLoopSpace):
 
     def save(self, params: torch.Tensor, run_dir: Path, name: str, role: str = "best") -> str:
         file = POLICY_FILE.format(role=role)
-        save_throw_catch_policy(run_dir / file, self.decode(params), name)
+        balls = self.cfg.env.get("balls", 1)
+        save_throw_catch_policy(run_dir / file, self.decode(params), name, balls)
         return file
 
     def describe(self, params: torch.Tensor, name: str) -> dict:
@@ -119,7 +122,7 @@ class ThrowCatchSpace(ClosedLoopSpace):
         """The means of the scalars and of the throw's total duration."""
         mean = distribution.mean
         durations = mean[2 : 2 + 3 * self.knots : 3]
-        scalars = zip(SCALARS, mean[2 + 3 * self.knots :], strict=True)
+        scalars = zip(self.scalars, mean[2 + 3 * self.knots :], strict=True)
         return {
             "mean_throw_duration": float(durations.sum()),
             **{f"mean_{key}": float(value) for key, value in scalars},
