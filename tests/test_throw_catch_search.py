@@ -1,6 +1,7 @@
 """The throw-and-catch search (``algo=throw_catch``), the flight fit and the roll-outs' limits."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -20,6 +21,18 @@ def test_it_starts_at_earth_expert_and_decodes_back_to_it():
     shipped = load_policy("earth_expert", env_preset("earth"))
     assert space.decode(space.start) == shipped.params
     assert len(space.start) == len(space.stds) == 2 + 3 * 3 + 3
+
+
+def test_a_two_ball_start_adds_its_lead_and_still_to_theta_and_its_balls_to_the_file(tmp_path):
+    space = ThrowCatchSpace(train_config("+experiment=two_balls_throw", "algo.workers=1"))
+    start = space.decode(space.start)
+    env = env_preset("paper", balls=2)
+    assert start == load_policy("two_balls_throw_start", env).params
+    assert space._names()[-2:] == ["lead", "still"] and len(space.start) == 2 + 3 * 3 + 5
+    moved = space.decode(space.start + 0.01)
+    assert moved.lead == pytest.approx(start.lead + 0.01) and moved.level == start.level
+    written = tmp_path / space.save(space.start, tmp_path, "mine")
+    assert load_policy(str(written), env).params == start  # it states balls: 2, as the env has
 
 
 def test_its_constraints_hold_over_many_wide_samples():
@@ -72,6 +85,10 @@ def test_episodes_beyond_the_limits_score_no_throws():
     assert within_limits(metrics, {"max_cup_height": 0.76, "max_joint_speed": 3.14})
     assert not within_limits(metrics, {"max_cup_height": 0.65})
     assert not within_limits(metrics, {"max_joint_speed": 2.5})
+    assert within_limits(metrics, {"max_balls_in_cup": 1})
+    shared = replace(metrics, max_balls_in_cup=2)  # two balls in the cup at once
+    assert within_limits(shared, {"max_balls_in_cup": None})
+    assert not within_limits(shared, {"max_balls_in_cup": 1})
     space = ThrowCatchSpace(train_config("algo=throw_catch", "env.duration=6"))
     start = space.decode(space.start)  # its cup rises to 0.66 m
     env_cfg = train_config("env=earth", "env.duration=6").env
