@@ -2,14 +2,14 @@
 ``ThrowCatchPolicy``.
 
 θ is the rest pose's lift and elbow (rad), the throw's knots, flattened (``[duration s, lift
-rad, elbow rad]`` each), then ``catch_height`` (m), ``settle`` (s), ``carry`` (s) and, if the
-start has one (several balls), ``lead`` (s), searched
+rad, elbow rad]`` each), then ``catch_height`` (m), ``settle`` (s), ``carry`` (s) and, where
+the start has them, ``lead`` (s, several balls) and ``still`` (s), searched
 from the start policy ``algo.start`` (a ``kind: throw_catch`` file), whose pan and wrist lock
 stay (the search env must lock the wrist as it does). Constraints (samples are clipped):
-``algo.bounds`` for the durations and the three scalars, the servos' control ranges for the
-angles. Every θ is rolled out closed loop
-under each of ``algo.conditions``, and an episode outside ``algo.limits`` (the cup above
-0.76 m, a joint faster than the speed limit) scores nothing (``ClosedLoopRollouts``). The best
+``algo.bounds`` for the durations and the scalars, the servos' control ranges for the
+angles. Every θ is rolled out closed loop under each of ``algo.conditions``, and an episode
+outside ``algo.limits`` (the cup above 0.76 m, a joint faster than the speed limit, two balls in
+the cup at once) scores nothing (``ClosedLoopRollouts``). The best
 θ is written as ``best_policy.yaml``.
 """
 
@@ -34,7 +34,7 @@ from jugglerl.policies.throw_catch import (
 )
 from jugglerl.policy_files import read_policy_file
 
-#: The scalars after the knots, in θ order; ``lead`` only when the start has one.
+#: The scalars after the knots, in θ order; ``lead`` and ``still`` only where the start has them.
 SCALARS = ("catch_height", "settle", "carry", "lead", "still")
 
 
