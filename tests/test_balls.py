@@ -10,6 +10,7 @@ from jugglerl.commands import load_command
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.feedback import LOCK_HEIGHT, FeedbackGains, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
+from jugglerl.policies.throw_catch import ThrowCatchPolicy
 from jugglerl.policy_files import PolicyFileError
 from jugglerl_envs import JuggleEnv
 
@@ -130,14 +131,18 @@ def test_with_two_balls_the_cup_tracks_the_next_landing_only_while_it_holds_none
     assert policy.offset[0] > 0.01 and policy.offset[1] == 0.0
 
 
-def test_the_shipped_two_ball_juggler_keeps_both_balls_up():
+@pytest.mark.parametrize(
+    "name, kind", [("two_balls", FeedbackPolicy), ("two_balls_throw", ThrowCatchPolicy)]
+)
+def test_a_shipped_two_ball_juggler_keeps_both_balls_up_one_at_a_time(name, kind):
     env = JuggleEnv(balls=2, duration=30.0)
-    policy = load_policy("two_balls", env)
-    assert isinstance(policy, FeedbackPolicy)
+    policy = load_policy(name, env)
+    assert isinstance(policy, kind)
     metrics = run_episode(env, policy, seed=0)
     assert metrics.time_to_drop is None and min(metrics.throws_per_ball) >= 8
+    assert metrics.max_cup_height <= 0.76 and metrics.max_balls_in_cup == 1
     env.close()
     with pytest.raises(
         PolicyFileError, match="juggles balls=2 but the env has 1: run it with env.balls=2"
     ):
-        load_policy("two_balls", JuggleEnv())
+        load_policy(name, JuggleEnv())

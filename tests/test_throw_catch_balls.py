@@ -1,5 +1,5 @@
 """Throw and catch with several balls at the paper preset: the level catch, the throw timed by the
-next ball down, and the shipped ``two_balls_throw``."""
+next ball down, and the shipped ``two_balls_throw`` (kept up by name: tests/test_balls.py)."""
 
 from dataclasses import replace
 
@@ -8,16 +8,14 @@ import pytest
 import yaml
 
 from jugglerl.commands import CommandError
-from jugglerl.evaluation import run_episode
 from jugglerl.policies.cup_ik import CupIK
 from jugglerl.policies.loading import load_policy
 from jugglerl.policies.throw_catch import (
     SEAT_HEIGHT,
-    ThrowCatchPolicy,
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
-from jugglerl.policy_files import PolicyFileError, read_policy_file
+from jugglerl.policy_files import read_policy_file
 from jugglerl_envs import JuggleEnv
 
 PAPER_WRIST = (-2.0, 1.5708, 0.0)
@@ -37,17 +35,6 @@ def test_a_level_solve_keeps_lift_plus_elbow_and_places_the_throat_horizontally(
         assert abs(ik.throat(solved)[2] - target[2]) > 0.1
     free = ik.solve(target, rest)  # without level: the height too, and the cup tilts
     np.testing.assert_allclose(ik.throat(free), target, atol=1e-5)
-
-
-def test_two_balls_throw_by_name_keeps_both_up_one_at_a_time_within_the_cup_height():
-    env = JuggleEnv(balls=2, duration=30.0)
-    policy = load_policy("two_balls_throw", env)
-    assert isinstance(policy, ThrowCatchPolicy)
-    metrics = run_episode(env, policy, seed=0)
-    assert metrics.time_to_drop is None and min(metrics.throws_per_ball) >= 8
-    assert metrics.max_cup_height <= 0.76 and metrics.max_balls_in_cup == 1
-    with pytest.raises(PolicyFileError, match="juggles balls=2 but the env has 1"):
-        load_policy("two_balls_throw", JuggleEnv())
 
 
 def test_each_throw_starts_as_the_other_ball_comes_down_within_lead():

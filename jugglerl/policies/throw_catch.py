@@ -152,10 +152,12 @@ class ThrowCatch:
 
 
 FIELD_NAMES = tuple(f.name for f in fields(ThrowCatch))
+#: the fields a policy may leave out (``None``: not used)
+OPTIONAL_FIELDS = tuple(f.name for f in fields(ThrowCatch) if f.default is None)
 #: the fields that are one number each
-SCALAR_KEYS = ("catch_height", "settle", "carry", "apex", "lead", "level", "still")
-#: what a file may leave out: ``env``, ``balls`` and the fields with a default
-OPTIONAL_KEYS = ("env", "balls", *(f.name for f in fields(ThrowCatch) if f.default is None))
+SCALAR_KEYS = ("catch_height", "settle", "carry", *OPTIONAL_FIELDS)
+#: what a file may leave out: ``env``, ``balls`` and the optional fields
+OPTIONAL_KEYS = ("env", "balls", *OPTIONAL_FIELDS)
 
 
 class ThrowCatchPolicy:
@@ -359,7 +361,7 @@ def save_throw_catch_policy(
 ) -> Path:
     """Write a throw_catch policy file; ``balls`` > 1 is stated in it (``balls: N``)."""
     data = {"kind": KIND, "name": name, **asdict(params)}
-    for key in ("apex", "lead", "level", "still"):
+    for key in OPTIONAL_FIELDS:
         if data[key] is None:
             del data[key]
     if balls > 1:
