@@ -1,7 +1,8 @@
 """JuggleRL's Gymnasium environments (installed as ``jugglerl_envs``; needs no torch).
 
 Importing this package registers ``JuggleRL/Juggle-v0``;
-``gymnasium.make("jugglerl_envs:JuggleRL/Juggle-v0")`` imports it on demand.
+``gymnasium.make("jugglerl_envs:JuggleRL/Juggle-v0")`` imports it on demand. ``JuggleBatch`` steps
+many of its envs at once (``jugglerl_envs.batch``).
 """
 
 import os
@@ -13,11 +14,12 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
 
 import gymnasium  # noqa: E402
 
+from jugglerl_envs.batch import JuggleBatch  # noqa: E402
 from jugglerl_envs.juggle import JuggleEnv  # noqa: E402
 
 ENV_ID = "JuggleRL/Juggle-v0"
 
-__all__ = ["ENV_ID", "JuggleEnv", "register_envs"]
+__all__ = ["ENV_ID", "JuggleBatch", "JuggleEnv", "register_envs"]
 
 
 def register_envs() -> None:

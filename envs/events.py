@@ -19,8 +19,6 @@ missed, even if it later bounces back in.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 
@@ -43,41 +41,64 @@ def count_throws(heights: np.ndarray, in_flight: np.ndarray, threshold: float) -
     return crossings.sum(axis=-1)
 
 
-@dataclass
 class JuggleEvents:
-    """Running counts for one episode, updated once per sample (env step)."""
+    """Running counts of ``[envs, balls]`` episodes, updated once per sample (env step).
 
-    threshold: float
-    throws: int = 0
-    catches: int = 0
-    streak: int = 0
-    max_streak: int = 0
-    _prev_height: float = float("nan")
-    _catchable: bool = False
+    ``throws``, ``catches``, ``streak`` (the catches of a ball since it was last missed) and
+    ``max_streak`` are integer arrays of that shape; ``threshold`` (m) is one per env.
+    """
 
-    def reset(self, height: float, clear_of_cup: bool) -> None:
-        """Start a new episode from the ball's first sample."""
-        self.throws = self.catches = self.streak = self.max_streak = 0
-        self._prev_height = height
-        self._catchable = clear_of_cup
+    def __init__(self, threshold: np.ndarray, balls: int):
+        envs = len(threshold)
+        self.threshold = np.asarray(threshold, dtype=np.float64)[:, None]
+        self.throws = np.zeros((envs, balls), dtype=np.int64)
+        self.catches = np.zeros((envs, balls), dtype=np.int64)
+        self.streak = np.zeros((envs, balls), dtype=np.int64)
+        self.max_streak = np.zeros((envs, balls), dtype=np.int64)
+        self._prev_height = np.full((envs, balls), np.nan)
+        self._catchable = np.zeros((envs, balls), dtype=bool)
+
+    def reset(self, envs: np.ndarray, heights: np.ndarray, clear_of_cup: np.ndarray) -> None:
+        """Start episodes of ``envs`` from their balls' first samples (``[len(envs), balls]``)."""
+        for counts in (self.throws, self.catches, self.streak, self.max_streak):
+            counts[envs] = 0
+        self._prev_height[envs] = heights
+        self._catchable[envs] = clear_of_cup
 
     def update(
-        self, height: float, in_flight: bool, in_cup: bool, clear_of_cup: bool, below_cup: bool
-    ) -> int:
-        """Take the next sample; return the number of throws it completes (0 or 1).
+        self,
+        envs: np.ndarray,
+        heights: np.ndarray,
+        in_flight: np.ndarray,
+        in_cup: np.ndarray,
+        clear_of_cup: np.ndarray,
+        below_cup: np.ndarray,
+    ) -> np.ndarray:
+        """Take the next sample of ``envs`` (each argument ``[len(envs), balls]``); return the
+        throws it completes per ball (0 or 1).
 
-        ``below_cup``: the ball is lower than the cup's throat (a missed ball, when not in the cup).
+        ``below_cup``: a ball is lower than the cup's throat (a missed ball, when not in the cup).
         """
-        new_throw = int(crossed_upward(self._prev_height, height, in_flight, self.threshold))
-        self.throws += new_throw
-        if in_cup and self._catchable:
-            self.catches += 1
-            self.streak += 1
-            self.max_streak = max(self.max_streak, self.streak)
-            self._catchable = False
-        elif clear_of_cup:
-            self._catchable = True
-            if below_cup:
-                self.streak = 0
-        self._prev_height = height
-        return new_throw
+        new_throws = crossed_upward(
+            self._prev_height[envs], heights, in_flight, self.threshold[envs]
+        ).astype(np.int64)
+        self.throws[envs] += new_throws
+        catchable = self._catchable[envs]
+        caught = in_cup & catchable
+        streak = self.streak[envs] + caught
+        missed = ~caught & clear_of_cup & below_cup
+        streak[missed] = 0
+        self.catches[envs] += caught
+        self.max_streak[envs] = np.maximum(self.max_streak[envs], streak)
+        self.streak[envs] = streak
+        self._catchable[envs] = np.where(caught, False, catchable | clear_of_cup)
+        self._prev_height[envs] = heights
+        return new_throws
+
+    def state_dict(self) -> dict:
+        names = ("throws", "catches", "streak", "max_streak", "_prev_height", "_catchable")
+        return {name: getattr(self, name).copy() for name in names}
+
+    def load_state_dict(self, state: dict) -> None:
+        for name, value in state.items():
+            getattr(self, name)[:] = value

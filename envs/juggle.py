@@ -2,6 +2,9 @@
 
 Gymnasium id ``JuggleRL/Juggle-v0`` (registered by ``import jugglerl`` or ``import jugglerl_envs``).
 Its defaults are the paper preset (gravity -2 m/s², the authors' code); see ``configs/env/``.
+Its arguments, their defaults and checks are listed once, in ``jugglerl_envs.settings``. It is a
+``JuggleBatch`` of one env (``jugglerl_envs.batch``, where the task's rules live), with MuJoCo's
+renderer: env ``i`` of a batch plays exactly as this env reset with the batch's seed plus ``i``.
 
 ## Action
 ``Box(-1, 1, (3,), float32)``: setpoints of the position servos of ``shoulder_pan_joint``,
@@ -39,7 +42,8 @@ before integrating), 2 ms older than the joint and ball states at the default ti
 ## Reward (kwarg ``reward``; one module each in ``jugglerl_envs.rewards``, documented there)
 ``throws`` (1 per throw over ``threshold`` in free flight, ``jugglerl_envs.events``: the paper's
 reward 1, the DPS objective), ``distance`` (``min(1, 0.05 m / cup-ball distance)``, reward 2),
-``contacts`` (ball-arm contacts, reward 3), ``juggle`` (ours: throws plus a small centring term).
+``contacts`` (ball-arm contacts, reward 3), ``juggle`` (ours: throws plus a small centring term),
+``cradle`` (ours: ``juggle`` less a cost for a held ball rolled off the cone's axis).
 
 ## Start state
 Arm at ``home`` (pan, lift, elbow) with the wrist at ``wrist_angles``, at rest; the ball at rest
@@ -77,144 +81,65 @@ count the true balls.
 
 from __future__ import annotations
 
-import math
-
-import mujoco
 import numpy as np
-from gymnasium import spaces
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from jugglerl_envs import actions, scene
-from jugglerl_envs.events import JuggleEvents
-from jugglerl_envs.measurements import SceneMeasurements
-from jugglerl_envs.perturbations import ActionNoise, BallKicks, BallTracker, scale_servo_gains
-from jugglerl_envs.rewards import REWARDS
-from jugglerl_envs.validation import check_choice, check_number, check_vector
+from jugglerl_envs.batch import DROP_HEIGHT, JuggleBatch, ball_slice
+from jugglerl_envs.settings import ARGUMENTS
+from jugglerl_envs.validation import check_choice
 
-DROP_HEIGHT = 0.1  # m: below this the ball counts as dropped
-MAX_RESET_NOISE = 0.05  # m: largest start offset of the ball (it must start above the cup)
-PAPER_HOME = (0.0, -1.5708, 2.15)  # rad: the paper preset (configs/env/paper.yaml)
-PAPER_WRIST = (-2.0, 1.5708, 0.0)
-#: Observation length with the paper's three actuators and one ball (two more with
-#: ``wrist_1_actuated``, ``BALL_SIZE`` more per further ball).
-OBSERVATION_SIZE = 18
-#: Observed values of a ball: its position and velocity.
-BALL_SIZE = 6
+__all__ = ["DROP_HEIGHT", "JuggleEnv"]
+
+#: The arguments a ``JuggleEnv`` lets change between episodes (properties; the others are fixed).
+POSES = ("home", "wrist_angles")
 
 
-class JuggleEnv(SceneMeasurements, MujocoEnv):
-    """UR5e juggling env; see the module docstring for spaces, rewards and episode end."""
+class JuggleEnv(MujocoEnv):
+    """UR5e juggling env; see the module docstring for spaces, rewards and episode end. The
+    keyword ``arguments`` are ``jugglerl_envs.settings.ARGUMENTS`` (the paper preset by default);
+    ``render_mode``, ``width``, ``height`` and ``camera_name`` set up MuJoCo's renderer."""
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"]}
 
     def __init__(
         self,
-        gravity: float = -2.0,
-        duration: float = 120.0,
-        threshold: float = 1.0,
-        reward: str = "throws",
-        frame_skip: int = 10,
-        timestep: float = 0.002,
-        ball_radius: float = 0.035,
-        ball_mass: float = 0.1,
-        reset_noise: float = 0.0,
-        joint_speed_limit: float | None = None,
-        servo_gain: float = 1.0,
-        kick_rate: float = 0.0,
-        kick_speed: float = 0.0,
-        action_noise: float = 0.0,
-        action_noise_correlation: float = 0.0,
-        ball_noise: float = 0.0,
-        ball_latency: int = 0,
-        drop_height: float = 0.5,
-        balls: int = 1,
-        ball_spacing: float = 2.0,
-        home: tuple[float, float, float] = PAPER_HOME,
-        wrist_angles: tuple[float, float, float] = PAPER_WRIST,
-        wrist_1_actuated: bool = False,
         render_mode: str | None = None,
         width: int = 640,
         height: int = 480,
         camera_name: str | None = "side",
+        **arguments,
     ):
-        self.gravity = check_number("gravity", gravity, -50.0, 0.0)
-        self.duration = check_number("duration", duration, 0.0, 1e6, low_open=True)
-        self.threshold = check_number("threshold", threshold, 0.0, 10.0, low_open=True)
-        self.reward_kind = reward
-        self._reward = REWARDS.get(reward)
-        frame_skip = check_number("frame_skip", frame_skip, 1, 1000, integer=True)
-        self.timestep = check_number("timestep", timestep, 0.0, 0.01, low_open=True)
-        self.ball_radius = check_number("ball_radius", ball_radius, 0.01, 0.09)
-        self.ball_mass = check_number("ball_mass", ball_mass, 0.0, 10.0, low_open=True)
-        self.reset_noise = check_number("reset_noise", reset_noise, 0.0, MAX_RESET_NOISE)
-        self.joint_speed_limit = (
-            None
-            if joint_speed_limit is None
-            else check_number("joint_speed_limit", joint_speed_limit, 0.0, 100.0, low_open=True)
-        )
-        self.servo_gain = check_number("servo_gain", servo_gain, 0.0, 10.0, low_open=True)
-        self.kick_rate = check_number("kick_rate", kick_rate, 0.0, 100.0)
-        self.kick_speed = check_number("kick_speed", kick_speed, 0.0, 10.0)
-        self._kicks = BallKicks(self.kick_rate, self.kick_speed)
-        self.action_noise = check_number("action_noise", action_noise, 0.0, 1.0)
-        self.action_noise_correlation = check_number(
-            "action_noise_correlation", action_noise_correlation, 0.0, 100.0
-        )
-        self.ball_noise = check_number("ball_noise", ball_noise, 0.0, 0.1)
-        self.ball_latency = check_number("ball_latency", ball_latency, 0, 50, integer=True)
-        self.drop_height = check_number("drop_height", drop_height, 0.0, 2.0)
-        self.balls = check_number("balls", balls, 1, scene.MAX_BALLS, integer=True)
-        self.ball_spacing = check_number("ball_spacing", ball_spacing, 0.0, 10.0)
-        self.home = np.array(check_vector("home", home, 3, -2 * math.pi, 2 * math.pi))
-        self.wrist_angles = np.array(
-            check_vector("wrist_angles", wrist_angles, 3, -2 * math.pi, 2 * math.pi)
-        )
-        if not isinstance(wrist_1_actuated, bool):
-            raise ValueError(f"wrist_1_actuated={wrist_1_actuated!r} is not valid: expected a bool")
-        self.wrist_1_actuated = wrist_1_actuated
-        self.actuated_joints = (
-            scene.ACTUATED_JOINTS_WITH_WRIST_1 if wrist_1_actuated else scene.ACTUATED_JOINTS
-        )
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
-
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / (timestep * frame_skip))}
-        size = OBSERVATION_SIZE + 2 * wrist_1_actuated + BALL_SIZE * (self.balls - 1)
-        observation_space = spaces.Box(-np.inf, np.inf, shape=(size,), dtype=np.float64)
+        self.batch = JuggleBatch(1, threads=1, autoreset=False, **arguments)
+        for key, value in self.batch.settings.env(0).items():
+            if key not in POSES:
+                setattr(self, "reward_kind" if key == "reward" else key, value)
+        self.actuated_joints = self.batch.actuated_joints
+        self.width, self.height = width, height  # MujocoEnv sizes the offscreen buffer with them
+        dt = self.batch.dt[0]
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / dt)}
         super().__init__(
             scene.scene_path(),
-            frame_skip,
-            observation_space,
+            self.batch.frame_skip,
+            self.batch.single_observation_space,
             render_mode=render_mode,
             width=width,
             height=height,
             camera_name=camera_name,
         )
-        self._cache_ids()
-        self._servos = len(self.actuated_joints)
-        self._action_noise = ActionNoise(
-            self.action_noise, self.action_noise_correlation, self.dt, self._servos
-        )
-        self._trackers = [
-            BallTracker(self.ball_noise, self.ball_latency, self.dt) for _ in range(self.balls)
-        ]
-        self._events = [JuggleEvents(self.threshold) for _ in range(self.balls)]
-        self._steps = 0
-        self._max_steps = max(1, round(self.duration / self.dt))
+        self._cup_site = self.batch._cup_site
 
     # --- set-up -----------------------------------------------------------------------------
     def _initialize_simulation(self):
-        model = scene.load_model(
-            self.gravity, self.timestep, self.ball_radius, self.ball_mass, self.balls
-        )
-        scale_servo_gains(model, slice(0, len(self.actuated_joints)), self.servo_gain)
+        model = self.batch.models[0]
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
-        return model, mujoco.MjData(model)
+        return model, self.batch.datas[0]
 
     def _set_action_space(self):
-        shape = (len(self.actuated_joints),)
-        self.action_space = spaces.Box(-1.0, 1.0, shape=shape, dtype=np.float32)
+        self.action_space = self.batch.single_action_space
         return self.action_space
 
     # --- action mapping ---------------------------------------------------------------------
@@ -229,153 +154,95 @@ class JuggleEnv(SceneMeasurements, MujocoEnv):
         return actions.ctrl_to_action(ctrl)
 
     # --- episode ----------------------------------------------------------------------------
-    def reset_model(self) -> np.ndarray:
-        qpos = self.init_qpos.copy()
-        qpos[self._arm_qpos] = np.concatenate([self.home, self.wrist_angles])
-        self.data.qpos[:] = qpos
-        self.data.qvel[:] = 0.0
-        self.data.ctrl[:] = qpos[self._arm_qpos]
-        mujoco.mj_forward(self.model, self.data)
-        cup = self.data.site_xpos[self._cup_site].copy()
-        for ball, address in enumerate(self._balls_qpos):
-            offset = self.np_random.uniform(-self.reset_noise, self.reset_noise, size=2)
-            height = self.drop_height + ball * self.ball_spacing
-            self.data.qpos[address : address + 3] = cup + np.array([*offset, height])
-            self.data.qpos[address + 3 : address + 7] = (1.0, 0.0, 0.0, 0.0)
-        mujoco.mj_forward(self.model, self.data)
-
-        self._steps = 0
-        self._kick_count = 0
-        self._setpoint = self.data.ctrl[: self._servos].copy()
-        self._peak_joint_speed = np.zeros(self._servos)
-        self._max_cup_height = float(self.cup_position()[2])
-        self._measure_balls()
-        self._max_balls_in_cup = sum(self._in_cup)
-        for ball, events in enumerate(self._events):
-            events.reset(self._heights[ball], self._clear_of_cup[ball])
-        self._physics_error = ""
-        self._action_noise.reset(self.np_random)
-        return self._get_obs(reset=True)
-
-    def _get_reset_info(self) -> dict:
-        return self._info()
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super(MujocoEnv, self).reset(seed=seed)  # seeds ``np_random``, which the batch draws from
+        self.batch.rngs[0] = self.np_random
+        observations, _ = self.batch.reset()
+        if self.render_mode == "human":
+            self.render()
+        return observations[0], self.batch.env_info(0)
 
     def step(self, action):
         action = np.asarray(action, dtype=np.float64)
-        if action.shape != (self._servos,):
+        if action.shape != (self.batch.servos,):
             raise ValueError(
-                f"an action of shape {action.shape}: this env drives {self._servos} servos"
+                f"an action of shape {action.shape}: this env drives {self.batch.servos} servos"
                 f" (wrist_1_actuated={self.wrist_1_actuated})"
             )
-        if self._action_noise.active:
-            action = action + self._action_noise.draw(self.np_random)
-        target = self.action_to_ctrl(action)
-        self._simulate(target)
-        self._steps += 1
-        self._kick_ball()
-        self._physics_error = self._check_physics()
-
-        self._measure_balls()
-        cup_height = self.data.site_xpos[self._cup_site, 2]
-        throws = 0
-        for ball, events in enumerate(self._events):
-            height = self._heights[ball]
-            throws += events.update(
-                height,
-                self._ball_in_flight(ball),
-                self._in_cup[ball],
-                self._clear_of_cup[ball],
-                height < cup_height,
-            )
-        speeds = np.abs(self.data.qvel[self._arm_qvel])
-        self._peak_joint_speed = np.maximum(self._peak_joint_speed, speeds)
-        self._max_cup_height = max(self._max_cup_height, float(self.cup_position()[2]))
-        self._max_balls_in_cup = max(self._max_balls_in_cup, sum(self._in_cup))
-
-        obs = self._get_obs()
-        reward = self._reward(self, throws)
-        terminated = bool(self._physics_error) or min(self._heights) < DROP_HEIGHT
-        truncated = self._steps >= self._max_steps and not terminated
+        observations, rewards, terminated, truncated = self.batch.step_without_info(action[None])
         if self.render_mode == "human":
             self.render()
-        return obs, reward, terminated, truncated, self._info()
+        info = self.batch.env_info(0)
+        return observations[0], float(rewards[0]), bool(terminated[0]), bool(truncated[0]), info
 
-    def _simulate(self, target: np.ndarray) -> None:
-        """Advance ``frame_skip`` physics steps towards the servo ``target`` (rad)."""
-        servos = self._servos
-        if self.joint_speed_limit is None:
-            self.data.ctrl[:servos] = target
-            mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-            return
-        max_change = self.joint_speed_limit * self.model.opt.timestep
-        for _ in range(self.frame_skip):
-            self._setpoint += np.clip(target - self._setpoint, -max_change, max_change)
-            self.data.ctrl[:servos] = self._setpoint
-            mujoco.mj_step(self.model, self.data)
+    @property
+    def home(self) -> np.ndarray:
+        """Start pose of pan, lift and elbow (rad); set it to start the next episodes elsewhere."""
+        return self.batch.settings.home[0]
+
+    @home.setter
+    def home(self, pose) -> None:
+        self.batch.settings.home[0] = ARGUMENTS["home"].check("home", pose)
+
+    @property
+    def wrist_angles(self) -> np.ndarray:
+        """The wrist's angles (rad), held by its servos; set them for the next episodes."""
+        return self.batch.settings.wrist_angles[0]
+
+    @wrist_angles.setter
+    def wrist_angles(self, angles) -> None:
+        self.batch.settings.wrist_angles[0] = ARGUMENTS["wrist_angles"].check(
+            "wrist_angles", angles
+        )
 
     @property
     def kicks_ball(self) -> bool:
         """Whether this env kicks the ball in flight (``kick_rate`` and ``kick_speed`` > 0)."""
-        return self._kicks.active
-
-    def _kick_ball(self) -> None:
-        """Maybe kick each ball in free flight (``kick_rate``, ``kick_speed``)."""
-        if not self._kicks.active:
-            return
-        for ball in range(self.balls):
-            if not self._ball_in_flight(ball):
-                continue
-            kick = self._kicks.draw(self.np_random, self.dt)
-            if kick is not None:
-                self.ball_velocity(ball)[:] += kick
-                self._kick_count += 1
-
-    def _get_obs(self, reset: bool = False) -> np.ndarray:
-        observation = self._true_obs()
-        if not self._trackers[0].active:  # the policy sees tracked balls; events the true ones
-            return observation
-        for ball, tracker in enumerate(self._trackers):
-            seen = self.ball_slice(ball)
-            track = tracker.reset if reset else tracker.observe
-            observation[seen] = track(observation[seen][:3], observation[seen][3:], self.np_random)
-        return observation
+        return self.kick_rate > 0 and self.kick_speed > 0
 
     def ball_slice(self, ball: int) -> slice:
         """Where ball ``ball``'s position and velocity sit in the observation."""
-        if ball == 0:
-            return slice(6, 12)
-        start = OBSERVATION_SIZE + 2 * self.wrist_1_actuated + BALL_SIZE * (ball - 1)
-        return slice(start, start + BALL_SIZE)
+        return ball_slice(ball, self.wrist_1_actuated)
 
-    def _true_obs(self) -> np.ndarray:
-        d = self.data
-        parts = [
-            d.qpos[self._arm_qpos[:3]],
-            d.qvel[self._arm_qvel[:3]],
-            self.ball_position(),
-            self.ball_velocity(),
-            d.site_xpos[self._cup_site],
-            self._cup_velocity(),
-        ]
-        if self.wrist_1_actuated:  # appended, so the indices above keep their meaning
-            parts += [d.qpos[self._arm_qpos[3:4]], d.qvel[self._arm_qvel[3:4]]]
-        for ball in range(1, self.balls):  # and after those, the further balls
-            parts += [self.ball_position(ball), self.ball_velocity(ball)]
-        return np.concatenate(parts)
+    def true_observation(self) -> np.ndarray:
+        """The observation with the true balls (what ``ball_noise`` and ``ball_latency`` hide),
+        at the last step."""
+        observation = self.batch._observations[0].copy()
+        for ball in range(self.balls):
+            seen = self.ball_slice(ball)
+            observation[seen] = np.concatenate(
+                [self.batch.ball_positions[0, ball], self.batch.ball_velocities[0, ball]]
+            )
+        return observation
 
-    def _info(self) -> dict:
-        return {
-            "throws": sum(events.throws for events in self._events),
-            "throws_per_ball": tuple(events.throws for events in self._events),
-            "catches": sum(events.catches for events in self._events),
-            "max_consecutive_catches": max(events.max_streak for events in self._events),
-            "ball_height": self._heights[0],
-            "ball_heights": tuple(self._heights),
-            "in_cup": self._in_cup[0],
-            "peak_joint_speed": self._peak_joint_speed.copy(),
-            "max_cup_height": self._max_cup_height,
-            "max_balls_in_cup": self._max_balls_in_cup,
-            "time": float(self.data.time),
-            "kicks": self._kick_count,
-            "physics_error": self._physics_error,
-        }
+    # --- the scene, read off (and writable through) MuJoCo's state -----------------------------
+    def ball_position(self, ball: int = 0) -> np.ndarray:
+        """The ball's centre (m, world frame), a view of ``data.qpos``."""
+        start = self.batch._balls_qpos[ball]
+        return self.data.qpos[start : start + 3]
+
+    def ball_velocity(self, ball: int = 0) -> np.ndarray:
+        """The ball's linear velocity (m/s, world frame), a view of ``data.qvel``."""
+        start = self.batch._balls_qvel[ball]
+        return self.data.qvel[start : start + 3]
+
+    def cup_position(self) -> np.ndarray:
+        """The cup's throat (site ``cup``, m, world frame), from the last physics step."""
+        return self.data.site_xpos[self._cup_site]
+
+    def ball_in_cup(self, ball: int = 0) -> bool:
+        """Whether ball ``ball``'s centre sat inside the cone, below its rim, after the step."""
+        return bool(self.batch.in_cup[0, ball])
+
+    def ball_in_cup_frame(self, ball: int = 0) -> tuple[float, float]:
+        """Ball centre in the cup frame (m): (distance from the cone axis, height above throat),
+        after the step."""
+        return float(self.batch.radial[0, ball]), float(self.batch.height_in_cup[0, ball])
+
+    def ball_arm_contacts(self) -> int:
+        """Contacts between the ball and the arm (links and cup plates) after the last step."""
+        return int(self.batch.ball_arm_contacts()[0])
+
+    def close(self):
+        self.batch.close()
+        super().close()

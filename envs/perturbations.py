@@ -1,22 +1,27 @@
-"""Disturbances the robustness benchmark applies to the juggling env (all off by default).
+"""Disturbances that robustness tests and training apply to the juggling env (off by default).
 
 A closed-loop policy earns its keep when the world is not as planned. Besides the ball's start
 offset (``reset_noise``) and its mass and radius (env arguments), the env can
 
 - scale the arm servos' proportional gain (``servo_gain``: 1 is nominal; below 1 the arm lags
   its setpoints and sags under load, as a worn or badly tuned drive would), and
-- kick the ball in free flight (``BallKicks``): at random times, ``rate`` kicks per second of
-  flight on average, each a horizontal velocity change of ``speed`` m/s in a uniformly random
-  direction — a gust, or a throw gone slightly wrong;
+- kick the ball in free flight (``draw_kick``): at random times, ``kick_rate`` kicks per second
+  of flight on average, each a horizontal velocity change of ``kick_speed`` m/s in a uniformly
+  random direction — a gust, or a throw gone slightly wrong;
 - add noise to the actions (``ActionNoise``: white or temporally correlated), as an imprecise
   controller or a network imitating a teacher would;
 - show the policy a tracked ball instead of the true one (``BallTracker``: position noise,
   velocities from noisy differences, latency), as a camera gives a real robot.
+
+Each works on a batch of envs (``jugglerl_envs.batch``) with its own settings per env; the random
+draws come from each env's own generator, env by env, in the order a lone env makes them, so an
+env of a batch plays exactly as the same env alone.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import mujoco
 import numpy as np
@@ -34,96 +39,114 @@ def scale_servo_gains(model: mujoco.MjModel, actuators: slice, gain: float) -> N
     model.actuator_biasprm[actuators, 1] *= gain
 
 
-class BallKicks:
-    """Random horizontal velocity kicks of ``speed`` m/s, ``rate`` per second of free flight."""
+def kick_probability(rate: float, seconds: float) -> float:
+    """Chance of a kick in ``seconds`` of flight for a Poisson process of ``rate`` per second."""
+    return -math.expm1(-rate * seconds)
 
-    def __init__(self, rate: float, speed: float):
-        self.rate = rate
-        self.speed = speed
 
-    @property
-    def active(self) -> bool:
-        return self.rate > 0 and self.speed > 0
-
-    def draw(self, rng: np.random.Generator, seconds: float) -> np.ndarray | None:
-        """The velocity change (x, y, z) of a kick in the next ``seconds`` of flight, or None.
-
-        A Poisson process of ``rate``: a kick happens with probability ``1 - exp(-rate dt)``.
-        """
-        if not self.active or rng.random() >= -math.expm1(-self.rate * seconds):
-            return None
-        angle = rng.uniform(0.0, 2 * math.pi)
-        return np.array([math.cos(angle), math.sin(angle), 0.0]) * self.speed
+def draw_kick(rng: np.random.Generator, probability: float, speed: float) -> np.ndarray | None:
+    """The velocity change (x, y, z) of a kick in the next env step, or None (no kick)."""
+    if rng.random() >= probability:
+        return None
+    angle = rng.uniform(0.0, 2 * math.pi)
+    return np.array([math.cos(angle), math.sin(angle), 0.0]) * speed
 
 
 class ActionNoise:
-    """Gaussian noise of std ``sigma`` (normalised action units) added to every action.
+    """Gaussian noise of std ``sigma[i]`` (normalised action units) added to env ``i``'s actions.
 
-    ``correlation`` (s) is the time constant of the noise: 0 draws it afresh every env step
+    ``correlation[i]`` (s) is the time constant of the noise: 0 draws it afresh every env step
     (white); otherwise it is an AR(1) (discrete Ornstein-Uhlenbeck) process with the same
     stationary std, ``n ← a n + σ √(1 - a²) ε`` with ``a = exp(-dt / correlation)``, like the slow
     drift of a real servo's setpoint.
     """
 
-    def __init__(self, sigma: float, correlation: float, dt: float, size: int = 3):
-        self.sigma = sigma
-        self.decay = math.exp(-dt / correlation) if correlation > 0 else 0.0
-        self.size = size  # the action's length
-        self.value = np.zeros(size)
+    def __init__(self, sigma: np.ndarray, correlation: np.ndarray, dt: np.ndarray, size: int):
+        self.sigma = [float(s) for s in sigma]
+        decay = [math.exp(-t / c) if c > 0 else 0.0 for t, c in zip(dt, correlation, strict=True)]
+        self.innovation = [s * math.sqrt(1 - a**2) for s, a in zip(self.sigma, decay, strict=True)]
+        self.decay = np.array(decay)
+        self.active = np.asarray(sigma) > 0
+        self.value = np.zeros((len(self.sigma), size))
 
-    @property
-    def active(self) -> bool:
-        return self.sigma > 0
+    def reset(self, envs: Sequence[int], rngs: Sequence[np.random.Generator]) -> None:
+        """Start the noise of ``envs`` afresh (a draw from its stationary distribution)."""
+        size = self.value.shape[1]
+        for env in envs:
+            noisy = self.active[env]
+            self.value[env] = rngs[env].normal(0.0, self.sigma[env], size) if noisy else 0.0
 
-    def reset(self, rng: np.random.Generator) -> None:
-        self.value = (
-            rng.normal(0.0, self.sigma, size=self.size) if self.active else np.zeros(self.size)
-        )
+    def draw(self, envs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:
+        """The noise of the next step of each of ``envs`` (once per step, after ``reset``)."""
+        noisy = envs[self.active[envs]]
+        if len(noisy):
+            size = self.value.shape[1]
+            innovations = np.array([rngs[e].normal(0.0, self.innovation[e], size) for e in noisy])
+            self.value[noisy] = self.decay[noisy, None] * self.value[noisy] + innovations
+        return self.value[envs]
 
-    def draw(self, rng: np.random.Generator) -> np.ndarray:
-        """The noise of the next step (call once per step, after ``reset``)."""
-        if not self.active:
-            return self.value
-        innovation = rng.normal(0.0, self.sigma * math.sqrt(1 - self.decay**2), size=self.size)
-        self.value = self.decay * self.value + innovation
-        return self.value
+    def state_dict(self) -> dict:
+        return {"value": self.value.copy()}
+
+    def load_state_dict(self, state: dict) -> None:
+        self.value[:] = state["value"]
 
 
 class BallTracker:
-    """What a camera tracker tells the policy about the ball, instead of the simulator's state.
+    """What a camera tracker tells the policy about the balls, instead of the simulator's state.
 
-    Positions carry Gaussian noise of std ``noise`` (m); with noise, the velocities are the finite
-    differences of those noisy positions over the control period (what a tracker running at the
-    control rate, 50 Hz by default, gives), not the true ones; and the whole ball observation
-    arrives ``latency`` env steps late. With ``noise = 0`` and ``latency = 0`` it is the true state.
+    Env ``i``'s ball positions carry Gaussian noise of std ``noise[i]`` (m); with noise, the
+    velocities are the finite differences of those noisy positions over the control period
+    ``dt[i]`` (what a tracker running at the control rate, 50 Hz by default, gives), not the true
+    ones; and the whole ball observation arrives ``latency[i]`` env steps late. With no noise and
+    no latency it is the true state. Balls are tracked alike, each with its own history.
     """
 
-    def __init__(self, noise: float, latency: int, dt: float):
-        self.noise = noise
-        self.latency = latency
-        self.dt = dt
-        self._history: list[np.ndarray] = []
-        self._last_position = np.zeros(3)
+    def __init__(self, noise: np.ndarray, latency: np.ndarray, dt: np.ndarray, balls: int):
+        self.noise = [float(n) for n in noise]
+        self.latency = np.asarray(latency, dtype=int)
+        self.dt = np.asarray(dt, dtype=np.float64)
+        self.active = (np.asarray(noise) > 0) | (self.latency > 0)
+        envs = len(self.noise)
+        depth = int(self.latency.max(initial=0)) + 1
+        #: the last ``depth`` observations of each env's balls, oldest first
+        self.history = np.zeros((envs, balls, depth, 6))
+        self.last_position = np.zeros((envs, balls, 3))
 
-    @property
-    def active(self) -> bool:
-        return self.noise > 0 or self.latency > 0
+    def _seen(self, env: int, positions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Env ``env``'s ball positions ``[balls, 3]`` as its tracker measures them."""
+        if self.noise[env] == 0:
+            return positions
+        return np.stack([p + rng.normal(0.0, self.noise[env], size=3) for p in positions])
 
-    def reset(self, position: np.ndarray, velocity: np.ndarray, rng: np.random.Generator):
-        """Start from the true first state (the ball at rest over the cup); return what is seen."""
-        seen = position + rng.normal(0.0, self.noise, size=3) if self.noise > 0 else position
-        self._last_position = seen
-        first = np.concatenate([seen, velocity])
-        self._history = [first] * (self.latency + 1)
+    def reset(self, envs, positions, velocities, rngs) -> np.ndarray:
+        """Start ``envs`` from the true first state (``positions``, ``velocities``:
+        ``[len(envs), balls, 3]``); return what is seen, ``[len(envs), balls, 6]``."""
+        seen = np.array([self._seen(e, p, rngs[e]) for e, p in zip(envs, positions, strict=True)])
+        first = np.concatenate([seen, velocities], axis=-1)
+        self.last_position[envs] = seen
+        self.history[envs] = first[:, :, None, :]
         return first
 
-    def observe(self, position: np.ndarray, velocity: np.ndarray, rng: np.random.Generator):
-        """The ball observation (position, velocity; 6 values) after a step."""
-        if self.noise > 0:
-            seen = position + rng.normal(0.0, self.noise, size=3)
-            velocity = (seen - self._last_position) / self.dt
-            self._last_position = seen
-            position = seen
-        self._history.append(np.concatenate([position, velocity]))
-        self._history.pop(0)
-        return self._history[0]
+    def observe(self, envs, positions, velocities, rngs) -> np.ndarray:
+        """The ball observations ``[len(envs), balls, 6]`` of ``envs`` after a step."""
+        seen = np.array([self._seen(e, p, rngs[e]) for e, p in zip(envs, positions, strict=True)])
+        noisy = np.array([self.noise[e] > 0 for e in envs], dtype=bool)
+        if noisy.any():
+            rows = np.asarray(envs)[noisy]
+            velocities = velocities.copy()
+            velocities[noisy] = (seen[noisy] - self.last_position[rows]) / self.dt[rows, None, None]
+            self.last_position[rows] = seen[noisy]
+        history = self.history[envs]
+        history[:, :, :-1] = history[:, :, 1:]
+        history[:, :, -1] = np.concatenate([seen, velocities], axis=-1)
+        self.history[envs] = history
+        depth = self.history.shape[2]
+        return history[np.arange(len(envs)), :, depth - 1 - self.latency[envs]]
+
+    def state_dict(self) -> dict:
+        return {"history": self.history.copy(), "last_position": self.last_position.copy()}
+
+    def load_state_dict(self, state: dict) -> None:
+        self.history[:] = state["history"]
+        self.last_position[:] = state["last_position"]

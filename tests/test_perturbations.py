@@ -100,10 +100,13 @@ def test_the_cradle_reward_charges_a_held_ball_for_its_distance_from_the_cone_ax
         env.step(hold)
         radial, _ = env.ball_in_cup_frame()
         cost = CRADLE_WEIGHT * min(1.0, radial / CRADLE_SCALE) if env.ball_in_cup() else 0.0
-        assert cradle_reward(env, 0) == pytest.approx(juggle_reward(env, 0) - cost)
+        none, one = np.zeros(1), np.ones(1)
+        assert cradle_reward(env.batch, none) == pytest.approx(
+            juggle_reward(env.batch, none) - cost
+        )
         held += cost > 0
     assert held > 50
-    assert cradle_reward(env, 1) == pytest.approx(cradle_reward(env, 0) + 1.0)
+    assert cradle_reward(env.batch, one) == pytest.approx(cradle_reward(env.batch, none) + 1.0)
 
 
 # --- imprecision ----------------------------------------------------------------------------------
@@ -135,11 +138,11 @@ def tracked_ball(steps: int = 60, **kwargs) -> tuple[np.ndarray, np.ndarray]:
     env = JuggleEnv(**kwargs)
     observation, _ = env.reset(seed=0)
     hold = env.ctrl_to_action(env.home)
-    seen, true = [observation[6:12]], [env._true_obs()[6:12]]
+    seen, true = [observation[6:12]], [env.true_observation()[6:12]]
     for _ in range(steps):
         observation, *_ = env.step(hold)
         seen.append(observation[6:12])
-        true.append(env._true_obs()[6:12])
+        true.append(env.true_observation()[6:12])
     return np.array(seen), np.array(true)
 
 
@@ -159,4 +162,4 @@ def test_ball_latency_shows_the_ball_steps_late_and_the_events_read_the_true_one
     env.reset(seed=0)
     for _ in range(10):
         observation, *_, info = env.step(env.ctrl_to_action(env.home))
-    assert info["ball_height"] == env._true_obs()[8] != observation[8]
+    assert info["ball_height"] == env.true_observation()[8] != observation[8]

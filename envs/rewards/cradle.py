@@ -9,6 +9,8 @@ about that a whole cycle later; this term tells it at once, while a correction c
 the ball. It is a cost, not a payment, so it never pays for holding the ball.
 """
 
+import numpy as np
+
 from jugglerl_envs.rewards import REWARDS
 from jugglerl_envs.rewards.juggle import juggle_reward
 
@@ -19,10 +21,6 @@ CRADLE_WEIGHT = 0.01
 
 
 @REWARDS.register("cradle")
-def cradle_reward(env, throws: int) -> float:
-    cost = 0.0
-    for ball in range(env.balls):
-        if env.ball_in_cup(ball):
-            radial, _ = env.ball_in_cup_frame(ball)
-            cost += CRADLE_WEIGHT * min(1.0, radial / CRADLE_SCALE)
-    return juggle_reward(env, throws) - cost
+def cradle_reward(batch, throws: np.ndarray) -> np.ndarray:
+    costs = CRADLE_WEIGHT * np.minimum(1.0, batch.radial / CRADLE_SCALE)
+    return juggle_reward(batch, throws) - np.where(batch.in_cup, costs, 0.0).sum(axis=1)

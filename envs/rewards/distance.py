@@ -2,14 +2,14 @@
 
 import numpy as np
 
-from jugglerl_envs.rewards import REWARDS
+from jugglerl_envs.rewards import REWARDS, lengths
 
 #: m: the reward is 1 within this distance of the cup.
 DISTANCE_SCALE = 0.05
 
 
 @REWARDS.register("distance")
-def distance_reward(env, throws: int) -> float:
-    """``min(1, DISTANCE_SCALE / distance)`` for the ball's distance from the cup's throat."""
-    distance = np.linalg.norm(env.ball_position() - env.cup_position())
-    return float(min(1.0, DISTANCE_SCALE / max(distance, 1e-9)))
+def distance_reward(batch, throws: np.ndarray) -> np.ndarray:
+    """``min(1, DISTANCE_SCALE / distance)`` for the first ball's distance from the cup's throat."""
+    distance = lengths(batch.ball_positions[:, 0] - batch.cup_position)
+    return np.minimum(1.0, DISTANCE_SCALE / np.maximum(distance, 1e-9))

@@ -7,7 +7,7 @@ without paying for holding the ball (as ``distance`` does), and a drop ends the 
 
 import numpy as np
 
-from jugglerl_envs.rewards import REWARDS
+from jugglerl_envs.rewards import REWARDS, lengths
 
 #: m: the centring term is 0 this far off the cup's axis.
 CENTRING_SCALE = 0.1
@@ -16,6 +16,6 @@ CENTRING_WEIGHT = 0.01
 
 
 @REWARDS.register("juggle")
-def juggle_reward(env, throws: int) -> float:
-    offset = np.linalg.norm(env.ball_position()[:2] - env.cup_position()[:2])
-    return throws + CENTRING_WEIGHT * max(0.0, 1.0 - offset / CENTRING_SCALE)
+def juggle_reward(batch, throws: np.ndarray) -> np.ndarray:
+    offset = lengths(batch.ball_positions[:, 0, :2] - batch.cup_position[:, :2])
+    return throws + CENTRING_WEIGHT * np.maximum(0.0, 1.0 - offset / CENTRING_SCALE)

@@ -40,7 +40,7 @@ def steps_per_second(env: gym.Env, steps: int, in_flight: bool) -> float:
         elapsed += time.perf_counter() - start
         done += chunk
         if in_flight:
-            assert base._ball_in_flight()
+            assert base.batch.in_flight[0, 0]
             env.reset()
     return done / elapsed
 

@@ -28,7 +28,7 @@ from jugglerl.dps.params import (
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.dps.spaces import SPACES
 from jugglerl.policies.command import CommandPolicy
-from jugglerl_envs.juggle import MAX_RESET_NOISE
+from jugglerl_envs.settings import MAX_RESET_NOISE
 from jugglerl_envs.validation import check_number
 
 #: A search's command files: ``best_command.yaml`` (its best roll-out) and ``mean_command.yaml``.
