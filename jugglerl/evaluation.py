@@ -51,6 +51,12 @@ def run_episode(env: gym.Env, policy: Policy, seed: int | None = None) -> Episod
     while not (terminated or truncated):
         action = policy.act(observation, info["time"])
         observation, _, terminated, truncated, info = env.step(action)
+    return episode_metrics(info, terminated, seed)
+
+
+def episode_metrics(info: dict, terminated: bool, seed: int | None) -> EpisodeMetrics:
+    """The metrics of an episode that ended (``terminated``, or else at its time limit) with
+    the env's ``info``."""
     dropped = terminated and not info["physics_error"]
     return EpisodeMetrics(
         throws=int(info["throws"]),

@@ -8,8 +8,8 @@ from cli import train_config
 from tensordict import TensorDict
 from torchrl.envs.utils import check_env_specs
 
+from jugglerl.batch.env_stack import make_env
 from jugglerl.networks.actors import build_actor
-from jugglerl.offpolicy.env_stack import make_env
 from jugglerl.policies.loading import load_policy
 from jugglerl.state.ball_clock import LOCK, BallClock
 from jugglerl.state.timestamp import phase_features

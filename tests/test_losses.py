@@ -7,9 +7,9 @@ import torch
 from cli import train_config
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
+from jugglerl.batch.env_stack import make_env
 from jugglerl.networks.actors import build_actor
 from jugglerl.offpolicy.buffer import ReplayBuffer
-from jugglerl.offpolicy.env_stack import make_env
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.losses.bc import TEACHER_ACTION
 from jugglerl.state.transforms import state_size

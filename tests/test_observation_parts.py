@@ -6,8 +6,8 @@ from cli import train_config
 from tensordict import TensorDict
 from torchrl.envs.utils import check_env_specs
 
+from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.networks.actors import build_actor
-from jugglerl.offpolicy.env_stack import make_env, normalisation
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.state.observation_parts import ObservationParts, observed_parts
 from jugglerl.state.transforms import state_size

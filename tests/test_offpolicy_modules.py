@@ -12,11 +12,11 @@ from torchrl.data import Bounded
 from torchrl.envs.utils import ExplorationType, check_env_specs, set_exploration_type
 from torchrl.modules import set_recurrent_mode
 
+from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.commands import load_command
 from jugglerl.networks.actors import build_actor, recurrent_state
 from jugglerl.networks.reference import CommandReference
 from jugglerl.offpolicy.buffer import ReplayBuffer
-from jugglerl.offpolicy.env_stack import make_env, normalisation
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.exploration.gaussian import CentredGaussianNoise, CommandCentre
 from jugglerl.policies.actor import ActorPolicy

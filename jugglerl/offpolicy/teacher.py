@@ -1,11 +1,11 @@
 """``TeacherModule``: any ``Policy`` acting inside the TorchRL loop, one copy per env of the batch.
 
 A teacher (the closed-loop ``FeedbackPolicy``, an open-loop command, a trained actor) is a plain
-policy with per-episode state, stepped on numpy observations. The module runs one copy of it
-per env of the batch on the env stack's raw ``observation`` and ``time`` (kept beside the
-networks' ``state``, see ``env_stack``), resets a copy when its env starts an episode
-(``is_init``), and writes the actions under ``("teacher", "action")``: into the replay buffer
-with each transition (the labels of behaviour cloning), and for exploration centred on it.
+policy with per-episode state, stepped on numpy observations. The module runs one copy of it per env
+of the batch on the env stack's raw ``observation`` and ``time`` (kept beside the networks'
+``state``, see ``jugglerl.batch.env_stack``), resets a copy when its env starts an episode
+(``is_init``), and writes the actions under ``("teacher", "action")``: into the replay buffer with
+each transition (the labels of behaviour cloning), and for exploration centred on it.
 """
 
 from __future__ import annotations

@@ -35,6 +35,7 @@ from tensordict.nn import TensorDictSequential
 from torchrl.collectors import Collector
 from tqdm import tqdm
 
+from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.config import make_juggle_env
 from jugglerl.interrupts import deferred_interrupt
@@ -42,7 +43,6 @@ from jugglerl.networks.actors import ACTION_SIZE, build_actor, recurrent_state
 from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.checks import check_config
-from jugglerl.offpolicy.env_stack import make_env, normalisation
 from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights

@@ -60,20 +60,30 @@ class ActorPolicy:
     def reset(self) -> None:
         self._memory = None
 
-    def act(self, observation: np.ndarray, time: float) -> np.ndarray:
+    #: ``jugglerl.batch.episodes``: a network acts on every env of a batch in one forward pass
+    acts_on_batches = True
+
+    def act(self, observation: np.ndarray, time, running: np.ndarray | None = None) -> np.ndarray:
+        """The action for one env (``observation [obs]``, ``time`` s), or the actions ``[N, act]``
+        for a batch (``[N, obs]``, ``[N]``; every row computed, ``running`` or not). A batch
+        keeps its size until ``reset()``."""
+        observation = torch.as_tensor(observation)
+        single = observation.ndim == 1
+        observations = observation.reshape(-1, observation.shape[-1])
+        rows = observations.shape[0]
         first = self._memory is None
         data = TensorDict(
             {
-                "observation": torch.as_tensor(observation).unsqueeze(0),
-                "time": torch.tensor([time], dtype=torch.float64),
-                "is_init": torch.tensor([[first]]),
+                "observation": observations,
+                "time": torch.as_tensor(time, dtype=torch.float64).reshape(rows),
+                "is_init": torch.full((rows, 1), first),
             },
-            batch_size=[1],
+            batch_size=[rows],
         )
         if first:
             self._memory = TensorDict(
-                {key: torch.zeros(1, *shape) for key, shape in self.recurrent.items()},
-                batch_size=[1],
+                {key: torch.zeros(rows, *shape) for key, shape in self.recurrent.items()},
+                batch_size=[rows],
             )
         data.update(self._memory)
         for transform in self.transforms:
@@ -84,5 +94,6 @@ class ActorPolicy:
         memory = {key: data.get(("next", key)) for key in self.recurrent}
         for transform in self.transforms:
             memory.update({key: data.get(key) for key in getattr(transform, "carried_keys", ())})
-        self._memory = TensorDict(memory, batch_size=[1])
-        return data["action"][0].numpy()
+        self._memory = TensorDict(memory, batch_size=[rows])
+        actions = data["action"].numpy()
+        return actions[0] if single else actions

@@ -3,11 +3,12 @@
 Each *perturbation family* varies one env argument (``jugglerl_envs.perturbations``): the ball's
 start offset, its mass, its radius, the arm servos' gain, the speed of random kicks of the ball in
 flight. ``measure`` runs every policy (open-loop commands and trained checkpoints alike, through
-``load_policy``) for ``seeds`` episodes at the nominal env and at each magnitude of each family,
-in worker processes; ``summarise`` turns the episodes into rows of mean throws, fraction of the
-policy's own nominal throws and time to drop, and ``breaking_points`` finds, per family, the first
-magnitude where a reference open-loop policy falls below a fraction of its nominal, and what the
-others keep there. ``markdown``/``plot`` render them for docs/results/ and the run directory.
+``load_policy``) for ``seeds`` episodes at the nominal env and at each magnitude of each family, a
+policy's episodes batched (``EpisodePool``) in worker processes; ``summarise`` turns the episodes
+into rows of mean throws, fraction of the policy's own nominal throws and time to drop, and
+``breaking_points`` finds, per family, the first magnitude where a reference open-loop policy falls
+below a fraction of its nominal, and what the others keep there. ``markdown``/``plot`` render them
+for docs/results/ and the run directory.
 """
 
 from __future__ import annotations
@@ -123,7 +124,7 @@ def measure(
     if seeds < 1:
         raise ValueError(f"seeds={seeds} must be >= 1")
     check_policies(policies, env_cfg)
-    plan = [(spec, condition) for condition in conditions(families) for spec in policies]
+    plan = [(spec, condition) for spec in policies for condition in conditions(families)]
     base = {**OmegaConf.to_container(env_cfg, resolve=True), "duration": duration}
     tasks = [
         EpisodeTask({**base, **condition.overrides}, spec, seed)
@@ -132,8 +133,10 @@ def measure(
     ]
     with EpisodePool(workers, cluster) as pool:
         results = pool.run(tasks, None if on_episode is None else lambda _: on_episode())
-    records = []
-    for index, (spec, condition) in enumerate(plan):
+    records = []  # by condition, then policy (the pool ran each policy's episodes together)
+    order = [(condition, spec) for condition in conditions(families) for spec in policies]
+    for condition, spec in order:
+        index = plan.index((spec, condition))
         episodes = results[index * seeds : (index + 1) * seeds]
         records.append(
             {

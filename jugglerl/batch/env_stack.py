@@ -1,10 +1,15 @@
-"""``make_env``: the juggling env batched in one process, under TorchRL's transform stack.
+"""``make_env``: the juggling envs batched in one process, under TorchRL's transform stack.
 
-TorchRL costs about half a millisecond per env call whatever the batch size, so
-the envs run as one synchronous Gymnasium vector env behind a single ``GymWrapper``. The stack
-keeps the env's physical ``observation`` (float64) and episode ``time`` (s, float64) as they
-are, for teachers acting in the loop (``jugglerl.offpolicy.teacher``), and builds the networks'
-input ``state`` beside them:
+TorchRL costs about half a millisecond per env call whatever the batch size, so the envs run as
+one batch behind a single TorchRL env, chosen by ``collector.env``:
+
+- ``batch`` (``jugglerl.batch.torchrl_env.JuggleBatchEnv``): a ``JuggleBatch``, its physics on
+  every core, several times faster (``scripts/benchmarks/bench_batch.py``);
+- ``gym``: a synchronous Gymnasium vector env of ``JuggleEnv``s behind TorchRL's ``GymWrapper``.
+
+Both give each env the same episode, value for value. The stack keeps the env's physical
+``observation`` (float64) and episode ``time`` (s, float64) as they are, for teachers acting in
+the loop (``jugglerl.offpolicy.teacher``), and builds the networks' input ``state`` beside them:
 
 | transform | why |
 | --- | --- |
@@ -42,13 +47,14 @@ from torchrl.envs import (
 )
 from torchrl.envs.libs.gym import default_info_dict_reader
 
+from jugglerl.batch.episodes import per_env_arguments
+from jugglerl.batch.torchrl_env import INFO_KEYS, JuggleBatchEnv
 from jugglerl.networks.actors import primer
 from jugglerl.state.transforms import state_transforms
 from jugglerl_envs import ENV_ID
 
-#: The info entries training and evaluation read, all numeric (see ``NumericInfo``), and their
-#: dtypes in the tensordict.
-INFO_KEYS = {"throws": torch.int64, "catches": torch.int64, "time": torch.float64}
+#: The base envs ``collector.env`` chooses from.
+BASE_ENVS = ("batch", "gym")
 
 
 class NumericInfo(gym.Wrapper):
@@ -110,16 +116,13 @@ def make_env(
     variants: list[dict] | None = None,
 ) -> EnvBase:
     """The batched env of ``cfg.env`` (its envs split among ``variants``, see
-    ``make_vector_env``) under the transform stack (see the module docstring), with the
-    recurrent state of the actor ``cfg.actor`` primed.
+    ``make_vector_env``; ``collector.env`` chooses the base env) under the transform stack (see
+    the module docstring), with the recurrent state of the actor ``cfg.actor`` primed.
 
     Pass the ``loc``/``scale`` of a trained run to reuse its normalisation; otherwise it is
     fitted on ``cfg.state.norm_frames`` random steps.
     """
-    env = TransformedEnv(GymWrapper(make_vector_env(cfg.env, num_envs, variants)))
-    info_specs = {key: Unbounded((num_envs,), dtype=dtype) for key, dtype in INFO_KEYS.items()}
-    info_specs["physics_error"] = Unbounded((num_envs,), dtype=torch.bool)
-    env.base_env.set_info_dict_reader(default_info_dict_reader(list(info_specs), spec=info_specs))
+    env = TransformedEnv(base_env(cfg, num_envs, variants))
     copy, cast, *rest = state_transforms(cfg.state, cfg.env.duration, loc, scale)
     for transform in (copy, cast, StepCounter()):
         env.append_transform(transform)
@@ -131,6 +134,30 @@ def make_env(
     if recurrent is not None:
         env.append_transform(recurrent)
     return env
+
+
+def base_env(cfg: DictConfig, num_envs: int, variants: list[dict] | None = None) -> EnvBase:
+    """The envs of ``cfg.env`` as one TorchRL env of ``batch_size=[num_envs]``, env ``i`` with
+    ``variants[i % len(variants)]`` on top, of the kind ``collector.env`` names."""
+    kind = cfg.collector.get("env", "gym")
+    if kind not in BASE_ENVS:
+        raise ValueError(f"collector.env={kind!r} is not available; choose one of {BASE_ENVS}")
+    if kind == "gym":
+        env = GymWrapper(make_vector_env(cfg.env, num_envs, variants))
+        info_specs = {key: Unbounded((num_envs,), dtype=dtype) for key, dtype in INFO_KEYS.items()}
+        info_specs["physics_error"] = Unbounded((num_envs,), dtype=torch.bool)
+        reader = default_info_dict_reader(list(info_specs), spec=info_specs)
+        env.set_info_dict_reader(reader)
+        return env
+    if num_envs < 1:
+        raise ValueError(f"collector.num_envs={num_envs} must be >= 1")
+    kwargs = OmegaConf.to_container(cfg.env, resolve=True)
+    variants = variants or [{}]
+    envs = [{**kwargs, **variants[index % len(variants)]} for index in range(num_envs)]
+    try:
+        return JuggleBatchEnv(num_envs, **per_env_arguments(envs))
+    except TypeError as error:  # an unknown key in the env group
+        raise ValueError(f"env config: {error}") from None
 
 
 def normalisation(env: EnvBase) -> ObservationNorm:
