@@ -1,10 +1,10 @@
 """What ``scripts/train.py`` runs: the trainer of ``algo.trainer``, resumed or new, to the end.
 
 Trainers (``TRAINERS``): ``offpolicy`` (``jugglerl.offpolicy.training.OffPolicyTraining``: DDPG,
-TD3, behaviour cloning) and ``search`` (``jugglerl.dps.training.SearchTraining``: DPS over a
-search space). Both are built as ``Trainer(cfg, run_dir, state)`` (``state``: a checkpoint to
-resume) and offer ``run(logger, progress)``, ``position()``, ``summary(metrics)``, ``close()`` and
-``recording_id``.
+TD3, behaviour cloning), ``onpolicy`` (``jugglerl.onpolicy.training.PPOTraining``: PPO) and
+``search`` (``jugglerl.dps.training.SearchTraining``: DPS over a search space). All are built as
+``Trainer(cfg, run_dir, state)`` (``state``: a checkpoint to resume) and offer ``run(logger,
+progress)``, ``position()``, ``summary(metrics)``, ``close()`` and ``recording_id``.
 """
 
 from __future__ import annotations
@@ -23,8 +23,15 @@ from jugglerl.run_files import METRICS, PARTIAL, write_atomically
 
 TRAINERS = {
     "offpolicy": "jugglerl.offpolicy.training:OffPolicyTraining",
+    "onpolicy": "jugglerl.onpolicy.training:PPOTraining",
     "search": "jugglerl.dps.training:SearchTraining",
 }
+
+
+def crossed(frames: int, batch: int, every: int) -> bool:
+    """True when the last ``batch`` frames passed a multiple of ``every`` (0: never): when a
+    trainer evaluates and checkpoints."""
+    return every > 0 and frames // every > (frames - batch) // every
 
 
 def trainer_class(name: str):

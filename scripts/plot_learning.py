@@ -17,7 +17,7 @@ import argparse
 from itertools import pairwise
 from pathlib import Path
 
-from jugglerl.offpolicy.evaluation import score
+from jugglerl.batch.evaluations import score
 from jugglerl.reports.run_tables import METRICS, run_metrics
 
 

@@ -4,10 +4,10 @@
 import pytest
 from cli import train_config
 
+from jugglerl.batch.evaluations import Evaluations, score
 from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import run_episode, summarise_episodes
 from jugglerl.offpolicy.checks import check_config
-from jugglerl.offpolicy.evaluation import Evaluations, score
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.logger import RerunLogger
 

@@ -8,8 +8,8 @@ import torch
 from cli import interrupt_train, rrd_verifies, run_script, run_train, train_config
 from tensordict import TensorDict
 
+from jugglerl.batch.batch_stats import BatchStats
 from jugglerl.checkpoints import load_checkpoint
-from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.recording.logger import RerunLogger

@@ -46,10 +46,12 @@ from torchrl.envs import (
     TransformedEnv,
 )
 from torchrl.envs.libs.gym import default_info_dict_reader
+from torchrl.envs.utils import ExplorationType, set_exploration_type
 
 from jugglerl.batch.episodes import per_env_arguments
 from jugglerl.batch.torchrl_env import INFO_KEYS, JuggleBatchEnv
 from jugglerl.networks.actors import primer
+from jugglerl.state.observation_parts import part_values
 from jugglerl.state.transforms import state_transforms
 from jugglerl_envs import ENV_ID
 
@@ -106,6 +108,28 @@ def make_vector_env(
 
 def _numeric_env(kwargs: dict) -> gym.Env:
     return NumericInfo(gym.make(ENV_ID, **kwargs))
+
+
+def check_collector(cfg: DictConfig) -> None:
+    """``ValueError`` naming the ``collector`` (or ``env``) keys of a budget that cannot work."""
+    if cfg.env.balls != 1:
+        raise ValueError(
+            f"env.balls={cfg.env.balls}: the networks' state observes one ball (jugglerl/state);"
+            " the trainers run with env.balls=1"
+        )
+    collect = cfg.collector
+    if collect.num_envs < 1:
+        raise ValueError(f"collector.num_envs={collect.num_envs} must be >= 1")
+    if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:
+        raise ValueError(
+            f"collector.frames_per_batch={collect.frames_per_batch} must be a multiple of"
+            f" collector.num_envs={collect.num_envs}"
+        )
+    if collect.total_frames < collect.frames_per_batch:
+        raise ValueError(
+            f"collector.total_frames={collect.total_frames} must be at least"
+            f" collector.frames_per_batch={collect.frames_per_batch}"
+        )
 
 
 def make_env(
@@ -169,3 +193,22 @@ def fit_normalisation(env: EnvBase, frames: int) -> None:
     """Fit the observation normalisation on about ``frames`` steps of uniformly random actions."""
     # init_stats rolls out until it has ``frames`` (batch x time) observations
     normalisation(env).init_stats(num_iter=frames, reduce_dim=(0, 1), cat_dim=1)
+
+
+#: Least spread the normalisation divides by (rad, rad/s, m, m/s): a part a policy's roll-outs
+#: barely move (the pan joint of a command that never pans) is not blown up from noise.
+MIN_SCALE = 0.01
+
+
+def fit_normalisation_on(env: EnvBase, actor, frames: int, parts: tuple[str, ...]) -> None:
+    """Fit the observation normalisation on about ``frames`` steps of ``actor`` acting (its
+    deterministic action): the states a policy starting from it will meet first. ``parts`` are
+    the observation's parts the state keeps (``state.observe``)."""
+    steps = max(1, -(-frames // env.batch_size.numel()))
+    with torch.no_grad(), set_exploration_type(ExplorationType.DETERMINISTIC):
+        rollout = env.rollout(steps, actor, break_when_any_done=False)
+    observation = rollout.get("observation").flatten(0, -2)
+    values = torch.cat([part_values(observation, part) for part in parts], dim=-1).float()
+    norm = normalisation(env)
+    norm.loc.copy_(values.mean(dim=0))
+    norm.scale.copy_(values.std(dim=0).clamp_min(MIN_SCALE))

@@ -35,15 +35,15 @@ from tensordict.nn import TensorDictSequential
 from torchrl.collectors import Collector
 from tqdm import tqdm
 
+from jugglerl.batch.batch_stats import BatchStats
 from jugglerl.batch.env_stack import make_env, normalisation
+from jugglerl.batch.evaluations import Evaluations
 from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.config import make_juggle_env
 from jugglerl.interrupts import deferred_interrupt
 from jugglerl.networks.actors import ACTION_SIZE, build_actor, recurrent_state
-from jugglerl.offpolicy.batch_stats import BatchStats
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.checks import check_config
-from jugglerl.offpolicy.evaluation import Evaluations
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights
 from jugglerl.offpolicy.losses import LOSSES
@@ -57,6 +57,7 @@ from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
 from jugglerl.run_files import METRICS, write_json
 from jugglerl.state.transforms import state_size, state_transforms
+from jugglerl.training import crossed
 
 #: The history entries the progress bar shows.
 POSTFIX = ("throws_per_minute", "return", "throws")
@@ -207,10 +208,10 @@ class OffPolicyTraining:
                 logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
                 bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
                 bar.update(batch.numel())
-                if _crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
+                if crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
                     record = self.evaluate(logger, self.cfg.eval.duration)
                     self.evaluations.keep_if_best(record, self.current_actor())
-                if _crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
+                if crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
                     self.save()
         finally:
             collector.shutdown(close_env=False)
@@ -327,8 +328,3 @@ class OffPolicyTraining:
 
     def close(self) -> None:
         self.env.close()
-
-
-def _crossed(frames: int, batch: int, every: int) -> bool:
-    """True when the last ``batch`` frames passed a multiple of ``every``."""
-    return every > 0 and frames // every > (frames - batch) // every

@@ -90,13 +90,43 @@ OFFPOLICY_CURVES = (
 )
 
 
-def offpolicy_curves(conditions: Sequence[str] = ()) -> tuple[Curve, ...]:
-    """``OFFPOLICY_CURVES``, and with perturbed evaluation ``conditions`` (``eval.perturbed``'s
-    names) a panel of their throws next to the nominal evaluation's."""
+#: PPO (``algo=ppo``): the episodes and rewards of training, the policy's spread and the
+#: update's own measures.
+ONPOLICY_CURVES = (
+    Curve("throws per episode", (f"{TRAIN}/throws", f"{EVAL}/mean_throws")),
+    Curve("throws per minute (training)", (f"{TRAIN}/throws_per_minute",), legend=None),
+    Curve("time up per episode (s)", (f"{TRAIN}/episode_seconds", f"{EVAL}/mean_time_to_drop")),
+    Curve("catch rate (evaluation)", (f"{EVAL}/catch_rate",), legend=None, y_range=FRACTION),
+    Curve("return per episode (training)", (f"{TRAIN}/return",), legend=None),
+    Curve(
+        "reward per step (training)",
+        (f"{TRAIN}/reward", f"{TRAIN}/reward_throws", f"{TRAIN}/reward_dense"),
+    ),
+    Curve("policy σ (normalised action units)", (f"{TRAIN}/sigma",), legend=None),
+    Curve("KL and clip fraction", (f"{TRAIN}/kl_approx", f"{TRAIN}/clip_fraction")),
+    Curve("critic loss", (f"{TRAIN}/loss_critic",), legend=None),
+    Curve("value and objective", (f"{TRAIN}/value", f"{TRAIN}/loss_objective")),
+    Curve("frames per second (collection)", (f"{TRAIN}/frames_per_second",), legend=None),
+)
+
+
+def with_perturbed(curves: tuple[Curve, ...], conditions: Sequence[str]) -> tuple[Curve, ...]:
+    """``curves``, and with perturbed evaluation ``conditions`` (``eval.perturbed``'s names) a
+    panel of their throws next to the nominal evaluation's."""
     if not conditions:
-        return OFFPOLICY_CURVES
+        return curves
     throws = (f"{EVAL}/mean_throws", *(f"{EVAL}/{name}/mean_throws" for name in conditions))
-    return (*OFFPOLICY_CURVES, Curve("throws per evaluation episode, perturbed", throws))
+    return (*curves, Curve("throws per evaluation episode, perturbed", throws))
+
+
+def offpolicy_curves(conditions: Sequence[str] = ()) -> tuple[Curve, ...]:
+    """``OFFPOLICY_CURVES`` (and the perturbed evaluations' throws, ``with_perturbed``)."""
+    return with_perturbed(OFFPOLICY_CURVES, conditions)
+
+
+def onpolicy_curves(conditions: Sequence[str] = ()) -> tuple[Curve, ...]:
+    """``ONPOLICY_CURVES`` (and the perturbed evaluations' throws, ``with_perturbed``)."""
+    return with_perturbed(ONPOLICY_CURVES, conditions)
 
 
 #: Search metrics of the roll-outs (``dps/*``: direct policy search and the feedback-gain search;

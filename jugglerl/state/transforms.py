@@ -27,11 +27,16 @@ def _harmonics(state_cfg: DictConfig) -> int:
     return state_cfg.get("harmonics", 1)  # runs saved before the key existed had one
 
 
+def normalised_size(state_cfg: DictConfig) -> int:
+    """How many values of ``state`` the normalisation standardises: the observed parts."""
+    return PART_SIZE * len(observed_parts(state_cfg))
+
+
 def state_size(state_cfg: DictConfig) -> int:
     """Size of the networks' input ``state``: the observed parts and, optionally, time features
     and the ball clock."""
     harmonics = _harmonics(state_cfg)
-    size = PART_SIZE * len(observed_parts(state_cfg))
+    size = normalised_size(state_cfg)
     size += num_time_features(harmonics) if state_cfg.timestamp else 0
     return size + (num_ball_clock_features(harmonics) if state_cfg.get("ball_clock") else 0)
 

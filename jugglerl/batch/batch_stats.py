@@ -1,4 +1,4 @@
-"""``BatchStats``: what the off-policy trainer logs of each collected batch.
+"""``BatchStats``: what the trainers log of each collected batch.
 
 Per batch: the mean reward per step; the throws per minute of simulated time over the last
 ``window`` batches, seen long before any episode ends (one batch alone is bursty: the envs start

@@ -1,0 +1,163 @@
+"""Periodic evaluation of a trained actor, and the choice of the actor a run deploys.
+
+``Evaluations`` runs ``eval.seeds`` deterministic episodes of an actor from env seeds
+``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``), and with
+``eval.perturbed`` (name: env arguments) ``eval.perturbed_seeds`` episodes of
+``eval.perturbed_duration`` s (or the condition's own ``duration``) under each of those
+conditions, from env seeds ``eval.perturbed_first_seed`` on: away from the seeds
+``scripts/robustness.py`` measures on, so that a run is not selected on its benchmark. All the
+episodes but the recorded one run as one ``JuggleBatch``, the actor acting on every env in one
+forward pass per step. It keeps every evaluation's record, and with ``eval.keep_best`` the
+weights of the best one, which the run then deploys instead of its last actor. An evaluation's
+score is the nominal episodes' catch rate (an actor must catch the ball from the standard start),
+then throws, then time up, each averaged over the nominal episodes and the perturbed conditions,
+a condition's throws and time scaled to the nominal episode's length (a tie goes to the later
+one): an actor that juggles only the nominal episode ranks below one that also juggles through
+noise and kicks. The off-policy and the on-policy trainers share it.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+
+from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episodes
+from jugglerl.config import make_juggle_env
+from jugglerl.evaluation import EpisodeMetrics, summarise_episodes
+from jugglerl.policies.actor import ActorPolicy
+from jugglerl.recording.blueprint import offpolicy_curves, training_blueprint
+from jugglerl.recording.episode import record_episode
+from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.names import EVAL, join
+from jugglerl_envs import JuggleBatch
+
+
+class Evaluations:
+    """The evaluations of one run (``records``) and, with ``eval.keep_best``, the ``best``;
+    ``curves`` gives the learning curves of the run's recording (``jugglerl.recording.blueprint``)
+    from the perturbed conditions' names."""
+
+    def __init__(
+        self, cfg: DictConfig, curves: Callable[[Sequence[str]], tuple] = offpolicy_curves
+    ):
+        self.cfg = cfg
+        self.conditions = perturbed_conditions(cfg)
+        #: the learning curves of ``train.rrd`` (``curves`` of the perturbed conditions' names)
+        self.curves = curves(list(self.conditions))
+        self.records: list[dict] = []
+        #: with ``eval.keep_best``: frames, score and weights of the best periodic evaluation
+        self.best: dict | None = None
+
+    def evaluate(self, policy: ActorPolicy, frames: int, logger: RerunLogger, duration: float):
+        """Deterministic episodes of ``policy`` of ``duration`` s, and the perturbed ones;
+        returns their record."""
+        check = self.cfg.eval
+        seeds = list(range(check.seeds))
+        recorded = []
+        if check.record:  # the first episode, into the recording
+            root = join(EVAL, f"{frames:08d}")
+            env = make_juggle_env(self.cfg.env, duration=duration)
+            stream, fps = logger.recording, self.cfg.logger.scene_fps
+            recorded.append(record_episode(env, policy, stream, root, seeds[0], fps))
+            logger.send_blueprint(training_blueprint(self.curves, root, self.cfg.env.threshold))
+        plan = [(None, {"duration": duration}, seed) for seed in seeds[len(recorded) :]]
+        first = check.perturbed_first_seed
+        for name, overrides in self.conditions.items():
+            overrides = {"duration": check.perturbed_duration, **overrides}
+            plan += [(name, overrides, first + k) for k in range(check.perturbed_seeds)]
+        episodes = self._episodes(policy, plan)
+        nominal = recorded + [m for (name, _, _), m in zip(plan, episodes, strict=True) if not name]
+        summary = summarise_episodes(nominal, check.catch_time)
+        record = {"frames": frames, "duration": duration, **summary}
+        record["episodes"] = [episode.to_dict() for episode in nominal]
+        metrics = {join(EVAL, key): value for key, value in summary.items()}
+        if self.conditions:
+            record["perturbed"] = {}
+            for name, overrides in self.conditions.items():
+                runs = [m for (n, _, _), m in zip(plan, episodes, strict=True) if n == name]
+                seconds = float(overrides.get("duration", check.perturbed_duration))
+                perturbed = {"duration": seconds, **summarise_episodes(runs, check.catch_time)}
+                record["perturbed"][name] = perturbed
+                metrics |= {join(EVAL, name, key): perturbed[key] for key in summary}
+        self.records.append(record)
+        logger.log_metrics(metrics, frames)
+        return record
+
+    def _episodes(self, policy: ActorPolicy, plan: list[tuple]) -> list[EpisodeMetrics]:
+        """The episodes of ``plan`` (condition, env arguments, seed), as one batch."""
+        if not plan:
+            return []
+        base = OmegaConf.to_container(self.cfg.env, resolve=True)
+        envs = [{**base, **overrides} for _, overrides, _ in plan]
+        batch = JuggleBatch(len(plan), autoreset=False, **per_env_arguments(envs))
+        episodes = run_episodes(batch, batch_policy(policy, len(plan)), [s for *_, s in plan])
+        batch.close()
+        return episodes
+
+    def keep_if_best(self, record: dict, actor) -> None:
+        """With ``eval.keep_best``, keep ``actor``'s weights if ``record`` is the best so far."""
+        if not self.cfg.eval.keep_best:
+            return
+        ranked = score(record)
+        if self.best is None or ranked >= self.best["score"]:
+            weights = copy.deepcopy(actor.state_dict())
+            self.best = {"frames": record["frames"], "score": ranked, "policy": weights}
+
+    def deployed(self, actor):
+        """``actor``, or with a kept best, a copy of it carrying the best weights."""
+        if self.best is None:
+            return actor
+        best = copy.deepcopy(actor)
+        best.load_state_dict(self.best["policy"])
+        return best
+
+    def state_dict(self) -> dict:
+        return {"evaluations": self.records, "best": self.best}
+
+    def load_state_dict(self, state: dict) -> None:
+        self.records = list(state["evaluations"])
+        self.best = state["best"]
+
+
+def check_evaluations(cfg: DictConfig) -> None:
+    """``ValueError`` naming the ``eval`` or ``env`` keys of evaluations that cannot run."""
+    if cfg.eval.seeds < 1 or cfg.eval.duration < cfg.eval.catch_time:
+        raise ValueError(
+            f"eval.seeds={cfg.eval.seeds} must be >= 1 and eval.duration={cfg.eval.duration}"
+            f" at least eval.catch_time={cfg.eval.catch_time}"
+        )
+    check, conditions = cfg.eval, perturbed_conditions(cfg)
+    if conditions and (check.perturbed_seeds < 1 or check.perturbed_duration <= 0):
+        raise ValueError(
+            f"eval.perturbed_seeds={check.perturbed_seeds} must be >= 1 and"
+            f" eval.perturbed_duration={check.perturbed_duration} > 0"
+        )
+    make_juggle_env(cfg.env).close()  # the nominal env first: its keys blamed as env.KEY
+    for name, overrides in conditions.items():  # fail now, not at the first evaluation
+        try:
+            make_juggle_env(cfg.env, **overrides).close()
+        except (ValueError, TypeError) as error:
+            raise ValueError(f"eval.perturbed.{name}: {error}") from None
+
+
+def perturbed_conditions(cfg: DictConfig) -> dict:
+    """``eval.perturbed``: condition name -> env arguments; none when the key is deleted
+    (``~eval.perturbed``) or empty."""
+    return dict(cfg.eval.get("perturbed") or {})
+
+
+def score(record: dict) -> list[float]:
+    """What ``keep_best`` ranks (compared as a list): the nominal catch rate, then throws and
+    time up, each the mean over the nominal summary and every perturbed condition's, whose
+    throws and time up count as in an episode of the nominal length (``record["duration"]``).
+    The nominal catch rate comes first so that lucky perturbed draws cannot lift an actor that
+    drops the ball from the standard start (an MLP run shipped 1 throw over a 46-throw actor)."""
+    rows = [[record["mean_throws"], record["mean_time_to_drop"]]]
+    for summary in record.get("perturbed", {}).values():
+        stretch = record["duration"] / summary["duration"]
+        rows.append([summary["mean_throws"] * stretch, summary["mean_time_to_drop"] * stretch])
+    throws, time_up = np.mean(rows, axis=0)
+    return [float(record["catch_rate"]), float(throws), float(time_up)]

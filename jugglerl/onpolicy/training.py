@@ -1,0 +1,306 @@
+"""The on-policy trainer (``trainer: onpolicy``, ``algo=ppo``), read top to bottom: collect a batch
+from every env -> advantages -> clipped PPO updates -> log -> evaluate -> checkpoint.
+
+``PPOTraining`` is built from the Hydra config (``configs/algo/ppo.yaml``) and a run directory.
+The envs are one ``JuggleBatch`` (``collector.env=batch``) of ``collector.num_envs`` envs, each
+under its own perturbation (``variants``), under the state transforms of ``jugglerl.state``; the
+observation normalisation is fitted on the untrained policy's mean, i.e. the reference's own
+roll-outs, and kept for the run. Each batch is ``collector.frames_per_batch / num_envs`` steps of
+every env; the last step's state is carried to the next batch, so episodes run across batches
+(a drop is ``terminated``, the time limit ``truncated``: GAE bootstraps through it). The updates
+are TorchRL's ``GAE`` (recomputed every epoch) and ``ClipPPOLoss`` (advantages normalised, an L2
+critic) over ``algo.epochs`` passes of minibatches of ``algo.minibatch_size``.
+
+It writes to the run directory
+
+- ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically): the
+  networks and optimiser, the normalisation, the batch of envs (physics, generators,
+  perturbations, counts) and the carried state, RNG states, counters, wall time, history,
+  evaluations, config and the deployed actor (``policy``: the mean of the best evaluated policy
+  with ``eval.keep_best``): a resumed run repeats an uninterrupted one;
+- ``metrics.json`` at the end: the final evaluation, the periodic ones and the per-batch history.
+
+Metrics go to rerun under ``train/`` (per batch: throws, return, reward, σ, KL, clip fraction,
+losses, frames/s) and ``eval/`` (each evaluation) on the ``step`` timeline (frames).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from omegaconf import DictConfig
+from tensordict import TensorDict
+from torchrl.envs.utils import ExplorationType, set_exploration_type
+from torchrl.objectives import ClipPPOLoss
+from torchrl.objectives.value import GAE
+from tqdm import tqdm
+
+from jugglerl.batch.batch_stats import BatchStats
+from jugglerl.batch.env_stack import fit_normalisation_on, make_env, normalisation
+from jugglerl.batch.evaluations import Evaluations
+from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
+from jugglerl.interrupts import deferred_interrupt
+from jugglerl.onpolicy.agent import make_agent, policy_sigma
+from jugglerl.onpolicy.checks import check_config
+from jugglerl.onpolicy.variants import training_variants
+from jugglerl.policies.actor import ActorPolicy
+from jugglerl.recording.blueprint import onpolicy_curves, training_blueprint
+from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.names import TRAIN, join
+from jugglerl.run_files import METRICS, write_json
+from jugglerl.state.observation_parts import observed_parts
+from jugglerl.state.transforms import normalised_size, state_size, state_transforms
+from jugglerl.training import crossed
+from jugglerl_envs.batch import usable_cores
+
+#: The history entries the progress bar shows.
+POSTFIX = ("throws_per_minute", "throws", "sigma")
+#: What each update logs, as ``ClipPPOLoss`` names it.
+LOSS_KEYS = ("loss_objective", "loss_critic", "loss_entropy", "kl_approx", "clip_fraction")
+
+
+class PPOTraining:
+    """One PPO run; ``run()`` trains to ``collector.total_frames``. Pass the ``state`` of
+    ``load_checkpoint(path)`` to resume it exactly."""
+
+    def __init__(self, cfg: DictConfig, run_dir: str | Path, state: dict | None = None):
+        check_config(cfg)
+        self.cfg = cfg
+        self.run_dir = Path(run_dir)
+        torch.manual_seed(cfg.seed)
+        collect, algo = cfg.collector, cfg.algo
+        size = normalised_size(cfg.state)
+        norm = (
+            state["normalisation"]
+            if state
+            else {"loc": torch.zeros(size), "scale": torch.ones(size)}
+        )
+        variants = training_variants(cfg, collect.num_envs)
+        self.env = make_env(cfg, collect.num_envs, norm["loc"], norm["scale"], variants)
+        self.env.set_seed(cfg.seed)
+        self.agent = make_agent(cfg, state_size(cfg.state))
+        self.advantage = GAE(
+            gamma=algo.gamma, lmbda=algo.lmbda, value_network=self.agent.critic, average_gae=False
+        )
+        self.loss = ClipPPOLoss(
+            self.agent.policy,
+            self.agent.critic,
+            clip_epsilon=algo.clip_epsilon,
+            entropy_bonus=algo.entropy_coeff > 0,
+            entropy_coeff=algo.entropy_coeff,
+            critic_coeff=algo.critic_coeff,
+            loss_critic_type="l2",
+            normalize_advantage=True,
+        )
+        self.optimizer = torch.optim.Adam(self.loss.parameters(), lr=cfg.optim.lr)
+        self.evaluations = Evaluations(cfg, onpolicy_curves)
+        self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
+        self.frames = 0
+        self.updates = 0
+        self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
+        self._session_start: float | None = None
+        self.history: list[dict] = []
+        self.recording_id: str | None = None
+        self.carried: TensorDict | None = None  # every env's state after the last batch
+        if state is not None:
+            self.load_state_dict(state)
+        else:
+            parts = observed_parts(cfg.state)
+            fit_normalisation_on(self.env, self.agent.actor, cfg.state.norm_frames, parts)
+
+    # --- the loop -------------------------------------------------------------------------
+    def run(self, logger: RerunLogger, progress: bool = True) -> dict:
+        """Train to the frame budget, evaluate in full, return the final metrics. On Ctrl-C the
+        checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        logger.send_blueprint(training_blueprint(self.evaluations.curves))
+        total = self.cfg.collector.total_frames
+        bar = tqdm(total=total, initial=self.frames, unit="frame", disable=not progress)
+        bar.set_description(f"PPO {self.cfg.actor.name}")
+        self._session_start = time.monotonic()
+        try:
+            with bar:
+                while self.frames < total:
+                    self._iteration(logger, bar)
+        except KeyboardInterrupt:
+            self.save()
+            raise
+        self.wall_seconds = self.wall_time()
+        self._session_start = None
+        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor())
+        if self.evaluations.best is not None:
+            final["policy_frames"] = self.evaluations.best["frames"]
+        self.save()
+        metrics = {
+            "algo": self.cfg.algo.name,
+            "actor": self.cfg.actor.name,
+            "reward": self.cfg.env.reward,
+            "seed": self.cfg.seed,
+            "wall_seconds": round(self.wall_seconds, 1),
+            "frames": self.frames,
+            "updates": self.updates,
+            "final_evaluation": final,
+            "evaluations": self.evaluations.records,
+            "history": self.history,
+        }
+        write_json(self.run_dir / METRICS, metrics)
+        return metrics
+
+    def _iteration(self, logger: RerunLogger, bar: tqdm) -> None:
+        record = self._collect_and_learn()
+        logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
+        bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
+        frames = self.cfg.collector.frames_per_batch
+        bar.update(frames)
+        if crossed(self.frames, frames, self.cfg.eval.every_frames):
+            evaluation = self.evaluate(logger, self.cfg.eval.duration)
+            self.evaluations.keep_if_best(evaluation, self.agent.actor)
+        if crossed(self.frames, frames, self.cfg.checkpoint_every_frames):
+            self.save()
+
+    def _collect_and_learn(self) -> dict[str, float]:
+        """One batch collected and learnt from; its record, added to the history."""
+        started = time.monotonic()
+        batch = self._collect()
+        collected = time.monotonic()
+        self.frames += batch.numel()
+        record = {"frames": self.frames, **self.batch_stats(batch), **reward_terms(batch)}
+        with deferred_interrupt():  # a Ctrl-C inside an update is not a clean stop
+            record |= self._learn(batch)
+        record["sigma"] = float(policy_sigma(self.agent).mean())
+        record["frames_per_second"] = batch.numel() / (collected - started)
+        record["update_seconds"] = time.monotonic() - collected
+        self.history.append(record)
+        return record
+
+    def _collect(self) -> TensorDict:
+        """``frames_per_batch / num_envs`` steps of every env under the sampling policy: a
+        tensordict ``[num_envs, steps]``."""
+        steps = self.cfg.collector.frames_per_batch // self.cfg.collector.num_envs
+        torch.set_num_threads(1)  # the physics has the cores
+        carried = self.carried if self.carried is not None else self.env.reset()
+        trajectory = []
+        with torch.no_grad(), set_exploration_type(ExplorationType.RANDOM):
+            for _ in range(steps):
+                carried = self.agent.policy(carried)
+                step, carried = self.env.step_and_maybe_reset(carried)
+                trajectory.append(step)
+        self.carried = carried
+        return torch.stack(trajectory, dim=1)
+
+    def _learn(self, batch: TensorDict) -> dict[str, float]:
+        """``algo.epochs`` passes of clipped PPO updates over ``batch``; mean losses."""
+        algo = self.cfg.algo
+        torch.set_num_threads(usable_cores())
+        parameters = list(self.loss.parameters())
+        totals: dict[str, list[float]] = {key: [] for key in LOSS_KEYS}
+        for _ in range(algo.epochs):
+            with torch.no_grad():
+                self.advantage(batch)  # with the critic as it is now
+            flat = batch.reshape(-1)
+            for indices in torch.randperm(flat.numel()).split(algo.minibatch_size):
+                losses = self.loss(flat[indices])
+                objective = sum(losses[k] for k in LOSS_KEYS[:3] if k in losses)
+                self.optimizer.zero_grad()
+                objective.backward()
+                torch.nn.utils.clip_grad_norm_(parameters, self.cfg.optim.max_grad_norm)
+                self.optimizer.step()
+                self.updates += 1
+                for key in LOSS_KEYS:
+                    if key in losses:
+                        totals[key].append(float(losses[key].detach()))
+        record = {key: float(np.mean(values)) for key, values in totals.items() if values}
+        record["value"] = float(batch["state_value"].mean())
+        return record
+
+    def position(self) -> str:
+        return f"frame {self.frames}"
+
+    def summary(self, metrics: dict) -> str:
+        """One line on what the run reached."""
+        final = metrics["final_evaluation"]
+        return (
+            f"PPO ({self.cfg.actor.name} actor, reward {self.cfg.env.reward}) after"
+            f" {metrics['frames']} frames: catch rate {final['catch_rate']:.0%},"
+            f" {final['mean_throws']:.1f} throws, ball up {final['mean_time_to_drop']:.1f} s on"
+            f" average over {len(final['episodes'])} episodes of {final['duration']:g} s"
+        )
+
+    def wall_time(self) -> float:
+        """Seconds of training so far, this session's included."""
+        running = 0.0 if self._session_start is None else time.monotonic() - self._session_start
+        return self.wall_seconds + running
+
+    # --- evaluation -----------------------------------------------------------------------
+    def deployed_actor(self):
+        """The actor the final evaluation, the checkpoint's ``policy`` and ``evaluate.py`` run:
+        with ``eval.keep_best``, the one of the best periodic evaluation; else the current one."""
+        return self.evaluations.deployed(self.agent.actor)
+
+    def evaluate(self, logger: RerunLogger, duration: float, actor=None) -> dict:
+        """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
+        norm = normalisation(self.env)
+        transforms = state_transforms(
+            self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
+        )
+        policy = ActorPolicy(actor if actor is not None else self.agent.actor, transforms, {})
+        return self.evaluations.evaluate(policy, self.frames, logger, duration)
+
+    # --- checkpoints ----------------------------------------------------------------------
+    def state_dict(self) -> dict:
+        norm = normalisation(self.env)
+        return {
+            **config_entries(self.cfg),
+            "deploys": "actor",
+            "policy": self.deployed_actor().state_dict(),
+            "agent": {
+                "policy": self.agent.policy.state_dict(),
+                "critic": self.agent.critic.state_dict(),
+            },
+            "optimizer": self.optimizer.state_dict(),
+            "normalisation": {"loc": norm.loc.clone(), "scale": norm.scale.clone()},
+            "envs": self.env.base_env.batch.state_dict(),
+            "carried": self.carried,
+            "rng": {"torch": torch.get_rng_state(), "numpy": np.random.get_state()},
+            "counters": {
+                "frames": self.frames,
+                "updates": self.updates,
+                "wall_seconds": self.wall_time(),
+            },
+            "batch_stats": self.batch_stats.state_dict(),
+            "history": self.history,
+            **self.evaluations.state_dict(),
+            "recording_id": self.recording_id,
+        }
+
+    def load_state_dict(self, state: dict) -> None:
+        self.agent.policy.load_state_dict(state["agent"]["policy"])
+        self.agent.critic.load_state_dict(state["agent"]["critic"])
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.env.base_env.batch.load_state_dict(state["envs"])
+        self.carried = state["carried"]
+        torch.set_rng_state(state["rng"]["torch"])
+        np.random.set_state(state["rng"]["numpy"])
+        self.frames = state["counters"]["frames"]
+        self.updates = state["counters"]["updates"]
+        self.wall_seconds = state["counters"]["wall_seconds"]
+        self.history = list(state["history"])
+        self.batch_stats.load_state_dict(state["batch_stats"])
+        self.evaluations.load_state_dict(state)
+        self.recording_id = state["recording_id"]
+
+    def save(self) -> None:
+        save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def reward_terms(batch: TensorDict) -> dict[str, float]:
+    """The reward per step split into its throws and the rest (the dense terms)."""
+    thrown = (batch["next", "throws"] - batch["throws"]).clamp(min=0).double().mean()
+    reward = batch["next", "reward"].double().mean()
+    return {"reward_throws": float(thrown), "reward_dense": float(reward - thrown)}
