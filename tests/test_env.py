@@ -204,3 +204,24 @@ def test_env_imports_without_torch():
     code = "import sys, jugglerl_envs; assert 'torch' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True)
     assert mujoco.__version__
+
+
+def test_the_rise_reward_pays_the_free_rise_up_to_the_threshold(hold):
+    """A ball tossed straight up beside the cup from 0.7 m at 2.5 m/s (apex ≈ 2.26 m at
+    g = -2): the rise term sums to its climb up to the 1 m threshold, and nothing after."""
+    from jugglerl_envs.rewards.juggle import juggle_reward
+    from jugglerl_envs.rewards.rise import RISE_WEIGHT
+
+    env = JuggleEnv(reward="rise")
+    env.reset(seed=0)
+    env.ball_position()[:] = env.cup_position() + [0.4, 0.0, 0.0]
+    env.ball_position()[2] = 0.7
+    env.ball_velocity()[:] = [0.0, 0.0, 2.5]
+    extra, throws = 0.0, 0
+    for _ in range(100):
+        _, reward, *_, info = env.step(hold(env))
+        thrown = info["throws"] - throws
+        throws = info["throws"]
+        extra += reward - float(juggle_reward(env.batch, np.array([thrown]))[0])
+    assert throws == 1  # the toss crossed the threshold in free flight
+    assert extra == pytest.approx(RISE_WEIGHT * (1.0 - 0.7), abs=0.05 * RISE_WEIGHT)

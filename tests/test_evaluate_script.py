@@ -58,3 +58,32 @@ def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
         assert result.returncode != 0
         assert result.stderr.strip().startswith(message), result.stderr
         assert "Traceback" not in result.stderr
+
+
+def test_several_seeds_add_the_other_starts_run_as_one_batch(tmp_path):
+    result = run_evaluate(
+        "policy=closed_loop",
+        "seeds=3",
+        "seed=4",
+        "duration=6",
+        "env.reset_noise=0.01",
+        f"hydra.run.dir={tmp_path}",
+    )
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    starts = metrics["starts"]
+    assert starts["seeds"] == [4, 5, 6] and starts["throws"][0] == metrics["throws"]
+    alone = run_evaluate(
+        "policy=closed_loop",
+        "seed=6",
+        "duration=6",
+        "env.reset_noise=0.01",
+        f"hydra.run.dir={tmp_path / 'alone'}",
+    )
+    assert alone.returncode == 0, alone.stderr
+    lone = json.loads((tmp_path / "alone" / "metrics.json").read_text())
+    assert lone["throws"] == starts["throws"][2]  # the batch's third start, run alone
+    assert "on average over 3 starts" in result.stdout
+    refused = run_evaluate("seeds=0", f"hydra.run.dir={tmp_path / 'refused'}")
+    assert refused.returncode == 1
+    assert refused.stderr.strip().startswith("error: seeds=0 is out of range")

@@ -197,7 +197,7 @@ def fit_normalisation(env: EnvBase, frames: int) -> None:
 
 #: Least spread the normalisation divides by (rad, rad/s, m, m/s): a part a policy's roll-outs
 #: barely move (the pan joint of a command that never pans) is not blown up from noise.
-MIN_SCALE = 0.01
+MIN_SCALE = 0.05
 
 
 def fit_normalisation_on(env: EnvBase, actor, frames: int, parts: tuple[str, ...]) -> None:

@@ -1,19 +1,19 @@
 """Periodic evaluation of a trained actor, and the choice of the actor a run deploys.
 
 ``Evaluations`` runs ``eval.seeds`` deterministic episodes of an actor from env seeds
-``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``), and with
-``eval.perturbed`` (name: env arguments) ``eval.perturbed_seeds`` episodes of
-``eval.perturbed_duration`` s (or the condition's own ``duration``) under each of those
-conditions, from env seeds ``eval.perturbed_first_seed`` on: away from the seeds
-``scripts/robustness.py`` measures on, so that a run is not selected on its benchmark. All the
-episodes but the recorded one run as one ``JuggleBatch``, the actor acting on every env in one
-forward pass per step. It keeps every evaluation's record, and with ``eval.keep_best`` the
-weights of the best one, which the run then deploys instead of its last actor. An evaluation's
-score is the nominal episodes' catch rate (an actor must catch the ball from the standard start),
-then throws, then time up, each averaged over the nominal episodes and the perturbed conditions,
-a condition's throws and time scaled to the nominal episode's length (a tie goes to the later
-one): an actor that juggles only the nominal episode ranks below one that also juggles through
-noise and kicks. The off-policy and the on-policy trainers share it.
+``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``: ``true`` at
+every evaluation, ``final`` at the run's last), and with ``eval.perturbed`` (name: env arguments)
+``eval.perturbed_seeds`` episodes of ``eval.perturbed_duration`` s (or the condition's own
+``duration``) under each of those conditions, from env seeds ``eval.perturbed_first_seed`` on: away
+from the seeds ``scripts/robustness.py`` measures on, so that a run is not selected on its
+benchmark. All the episodes but the recorded one run as one ``JuggleBatch``, the actor acting on
+every env in one forward pass per step. It keeps every evaluation's record, and with
+``eval.keep_best`` the weights of the best one, which the run then deploys instead of its last
+actor. An evaluation's score is the nominal episodes' catch rate (an actor must catch the ball from
+the standard start), then throws, then time up, each averaged over the nominal episodes and the
+perturbed conditions, a condition's throws and time scaled to the nominal episode's length (a tie
+goes to the later one): an actor that juggles only the nominal episode ranks below one that also
+juggles through noise and kicks. The off-policy and the on-policy trainers share it.
 """
 
 from __future__ import annotations
@@ -51,13 +51,21 @@ class Evaluations:
         #: with ``eval.keep_best``: frames, score and weights of the best periodic evaluation
         self.best: dict | None = None
 
-    def evaluate(self, policy: ActorPolicy, frames: int, logger: RerunLogger, duration: float):
+    def evaluate(
+        self,
+        policy: ActorPolicy,
+        frames: int,
+        logger: RerunLogger,
+        duration: float,
+        final: bool = False,
+    ):
         """Deterministic episodes of ``policy`` of ``duration`` s, and the perturbed ones;
-        returns their record."""
+        returns their record. ``final``: the run's last evaluation, recorded with
+        ``eval.record=final`` too."""
         check = self.cfg.eval
         seeds = list(range(check.seeds))
         recorded = []
-        if check.record:  # the first episode, into the recording
+        if check.record is True or (final and check.record == "final"):  # into the recording
             root = join(EVAL, f"{frames:08d}")
             env = make_juggle_env(self.cfg.env, duration=duration)
             stream, fps = logger.recording, self.cfg.logger.scene_fps
@@ -129,6 +137,8 @@ def check_evaluations(cfg: DictConfig) -> None:
             f"eval.seeds={cfg.eval.seeds} must be >= 1 and eval.duration={cfg.eval.duration}"
             f" at least eval.catch_time={cfg.eval.catch_time}"
         )
+    if cfg.eval.record not in (True, False, "final"):
+        raise ValueError(f"eval.record={cfg.eval.record}: true, false or final")
     check, conditions = cfg.eval, perturbed_conditions(cfg)
     if conditions and (check.perturbed_seeds < 1 or check.perturbed_duration <= 0):
         raise ValueError(

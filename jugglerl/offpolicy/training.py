@@ -138,7 +138,7 @@ class OffPolicyTraining:
             raise
         self.wall_seconds = self.wall_time()
         self._session_start = None
-        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor())
+        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
         if self.evaluations.best is not None:
             final["policy_frames"] = self.evaluations.best["frames"]
         self.save()
@@ -280,10 +280,12 @@ class OffPolicyTraining:
         )
         return ActorPolicy(actor, transforms, recurrent_state(self.cfg.actor))
 
-    def evaluate(self, logger: RerunLogger, duration: float, actor=None) -> dict:
+    def evaluate(
+        self, logger: RerunLogger, duration: float, actor=None, final: bool = False
+    ) -> dict:
         """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
         policy = self.actor_policy(actor if actor is not None else self.current_actor())
-        return self.evaluations.evaluate(policy, self.frames, logger, duration)
+        return self.evaluations.evaluate(policy, self.frames, logger, duration, final)
 
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:

@@ -130,7 +130,7 @@ class PPOTraining:
             raise
         self.wall_seconds = self.wall_time()
         self._session_start = None
-        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor())
+        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
         if self.evaluations.best is not None:
             final["policy_frames"] = self.evaluations.best["frames"]
         self.save()
@@ -193,8 +193,12 @@ class PPOTraining:
 
     def _learn(self, batch: TensorDict) -> dict[str, float]:
         """``algo.epochs`` passes of clipped PPO updates over ``batch``; mean losses."""
-        algo = self.cfg.algo
+        algo, optim = self.cfg.algo, self.cfg.optim
         torch.set_num_threads(usable_cores())
+        if optim.anneal_lr:  # linearly to 0 at the end of the budget
+            done = (self.frames - batch.numel()) / self.cfg.collector.total_frames
+            for group in self.optimizer.param_groups:
+                group["lr"] = optim.lr * (1 - done)
         parameters = list(self.loss.parameters())
         totals: dict[str, list[float]] = {key: [] for key in LOSS_KEYS}
         for _ in range(algo.epochs):
@@ -214,6 +218,7 @@ class PPOTraining:
                         totals[key].append(float(losses[key].detach()))
         record = {key: float(np.mean(values)) for key, values in totals.items() if values}
         record["value"] = float(batch["state_value"].mean())
+        record["lr"] = self.optimizer.param_groups[0]["lr"]
         return record
 
     def position(self) -> str:
@@ -240,14 +245,16 @@ class PPOTraining:
         with ``eval.keep_best``, the one of the best periodic evaluation; else the current one."""
         return self.evaluations.deployed(self.agent.actor)
 
-    def evaluate(self, logger: RerunLogger, duration: float, actor=None) -> dict:
+    def evaluate(
+        self, logger: RerunLogger, duration: float, actor=None, final: bool = False
+    ) -> dict:
         """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
         norm = normalisation(self.env)
         transforms = state_transforms(
             self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
         )
         policy = ActorPolicy(actor if actor is not None else self.agent.actor, transforms, {})
-        return self.evaluations.evaluate(policy, self.frames, logger, duration)
+        return self.evaluations.evaluate(policy, self.frames, logger, duration, final)
 
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:
