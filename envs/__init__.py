@@ -6,11 +6,25 @@ many of its envs at once (``jugglerl_envs.batch``).
 """
 
 import os
+import platform
 
 # Headless machines have no display for MuJoCo's default GLFW backend; EGL renders off-screen.
 # Set before MuJoCo is imported, and only when the user has not chosen a backend.
 if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
+
+#: The values of ``MUJOCO_GL`` MuJoCo's bindings take on this system (any other fails their import).
+GL_BACKENDS = {"Linux": ("egl", "osmesa", "glfw", "glx"), "Darwin": ("cgl", "glfw")}.get(
+    platform.system(), ("glfw", "wgl")
+)
+_GL_SWITCHES = ("", "enable", "enabled", "on", "true", "1", "disable", "disabled", "off", "false")
+_chosen = os.environ.get("MUJOCO_GL", "")
+if _chosen.lower().strip() not in (*GL_BACKENDS, *_GL_SWITCHES, "0"):
+    # before MuJoCo's import raises it with a traceback: one line, as every tool's errors
+    raise SystemExit(
+        f"error: MUJOCO_GL={_chosen} is not a MuJoCo rendering backend here;"
+        f" use one of {', '.join(GL_BACKENDS)}, or unset it"
+    )
 
 import gymnasium  # noqa: E402
 

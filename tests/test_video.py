@@ -87,3 +87,26 @@ def test_no_opengl_is_one_line_naming_the_backend_and_the_packages(tmp_path, mon
     assert str(error.value).startswith("video needs OpenGL for MuJoCo's offscreen renderer")
     assert "MUJOCO_GL=egl" in str(error.value) and "apt-get install libegl1" in str(error.value)
     assert not (tmp_path / "clip.mp4").exists()
+
+
+def test_an_unknown_mujoco_gl_is_one_line_before_mujoco_is_imported(tmp_path):
+    """MuJoCo's import raises on an unknown backend; the env package says so first, in a fresh
+    interpreter (the tests' script runner has MuJoCo imported already)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    result = subprocess.run(
+        [sys.executable, str(root / "scripts" / "evaluate.py"), f"hydra.run.dir={tmp_path}"],
+        env={**os.environ, "MUJOCO_GL": "foo"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert result.stderr.strip() == (
+        "error: MUJOCO_GL=foo is not a MuJoCo rendering backend here; use one of egl, osmesa,"
+        " glfw, glx, or unset it"
+    )

@@ -25,7 +25,6 @@ go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the 
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -35,10 +34,10 @@ from tensordict.nn import TensorDictSequential
 from torchrl.collectors import Collector
 from tqdm import tqdm
 
+from jugglerl.batch.actor_training import ActorTraining
 from jugglerl.batch.batch_stats import BatchStats
 from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.batch.evaluations import Evaluations
-from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.config import make_juggle_env
 from jugglerl.interrupts import deferred_interrupt
 from jugglerl.networks.actors import ACTION_SIZE, build_actor, recurrent_state
@@ -50,20 +49,17 @@ from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
-from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.loading import load_policy
-from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
-from jugglerl.run_files import METRICS, write_json
-from jugglerl.state.transforms import state_size, state_transforms
+from jugglerl.state.transforms import state_size
 from jugglerl.training import crossed
 
 #: The history entries the progress bar shows.
 POSTFIX = ("throws_per_minute", "return", "throws")
 
 
-class OffPolicyTraining:
+class OffPolicyTraining(ActorTraining):
     """One off-policy run; ``run()`` trains to ``collector.total_frames``. Pass the ``state`` of
     ``load_checkpoint(path)`` to resume (it also supplies the observation normalisation)."""
 
@@ -120,44 +116,6 @@ class OffPolicyTraining:
         self.policy = TensorDictSequential(*self.teacher, self.actor, self.noise)
 
     # --- the loop -------------------------------------------------------------------------
-    def run(self, logger: RerunLogger, progress: bool = True) -> dict:
-        """Train to the frame budget, evaluate in full, return the final metrics. On Ctrl-C the
-        checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
-        self.run_dir.mkdir(parents=True, exist_ok=True)
-        logger.send_blueprint(training_blueprint(self.evaluations.curves))
-        collect = self.cfg.collector
-        bar = tqdm(
-            total=collect.total_frames, initial=self.frames, unit="frame", disable=not progress
-        )
-        self._session_start = time.monotonic()
-        try:
-            with bar:
-                self._train(logger, bar)
-        except KeyboardInterrupt:
-            self.save()
-            raise
-        self.wall_seconds = self.wall_time()
-        self._session_start = None
-        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
-        if self.evaluations.best is not None:
-            final["policy_frames"] = self.evaluations.best["frames"]
-        self.save()
-        metrics = {
-            "algo": self.cfg.algo.name,
-            "actor": self.cfg.actor.name,
-            "exploration": self.cfg.exploration.name,
-            "reward": self.cfg.env.reward,
-            "seed": self.cfg.seed,
-            "wall_seconds": round(self.wall_seconds, 1),
-            "frames": self.frames,
-            "updates": self.updates,
-            "final_evaluation": final,
-            "evaluations": self.evaluations.records,
-            "history": self.history,
-        }
-        write_json(self.run_dir / METRICS, metrics)
-        return metrics
-
     def _train(self, logger: RerunLogger, bar: tqdm) -> None:
         """Each stage from the current one, each collected to its end. A stage starts from the
         actor the one before would deploy (``current_actor``: with ``eval.target_actor`` its
@@ -241,24 +199,11 @@ class OffPolicyTraining:
         demos = self.demonstrations.sample(fraction)
         return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
 
-    def position(self) -> str:
-        return f"frame {self.frames}"
-
-    def summary(self, metrics: dict) -> str:
-        """One line on what the run reached."""
-        final = metrics["final_evaluation"]
+    def label(self) -> str:
         return (
             f"{self.cfg.algo.name.upper()} ({self.cfg.actor.name} actor,"
-            f" {self.cfg.exploration.name} exploration, reward {self.cfg.env.reward}) after"
-            f" {metrics['frames']} frames: catch rate {final['catch_rate']:.0%},"
-            f" {final['mean_throws']:.1f} throws, ball up {final['mean_time_to_drop']:.1f} s on"
-            f" average over {len(final['episodes'])} episodes of {final['duration']:g} s"
+            f" {self.cfg.exploration.name} exploration, reward {self.cfg.env.reward})"
         )
-
-    def wall_time(self) -> float:
-        """Seconds of training so far, this session's included."""
-        running = 0.0 if self._session_start is None else time.monotonic() - self._session_start
-        return self.wall_seconds + running
 
     # --- evaluation -----------------------------------------------------------------------
     def current_actor(self):
@@ -267,66 +212,18 @@ class OffPolicyTraining:
         updates; its average moves by ``algo.tau`` per update and holds on to what worked."""
         return self.update.target_actor() if self.cfg.eval.target_actor else self.actor
 
-    def deployed_actor(self):
-        """The actor the final evaluation, the checkpoint's ``policy`` and ``evaluate.py`` run:
-        with ``eval.keep_best``, the one of the best periodic evaluation; else the current one."""
-        return self.evaluations.deployed(self.current_actor())
-
-    def actor_policy(self, actor) -> ActorPolicy:
-        """``actor`` as a deterministic ``Policy`` on plain Gymnasium envs."""
-        norm = normalisation(self.env)
-        transforms = state_transforms(
-            self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
-        )
-        return ActorPolicy(actor, transforms, recurrent_state(self.cfg.actor))
-
-    def evaluate(
-        self, logger: RerunLogger, duration: float, actor=None, final: bool = False
-    ) -> dict:
-        """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
-        policy = self.actor_policy(actor if actor is not None else self.current_actor())
-        return self.evaluations.evaluate(policy, self.frames, logger, duration, final)
-
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:
-        norm = normalisation(self.env)
         return {
-            **config_entries(self.cfg),
-            "deploys": "actor",
+            **self.common_state(),
             "actor": self.actor.state_dict(),
-            "policy": self.deployed_actor().state_dict(),
             "update": self.update.state_dict(),
-            "normalisation": {"loc": norm.loc.clone(), "scale": norm.scale.clone()},
             "stage": self.stage.index,
             "exploration": self.noise.state_dict(),
-            "rng": {"torch": torch.get_rng_state(), "numpy": np.random.get_state()},
-            "counters": {
-                "frames": self.frames,
-                "updates": self.updates,
-                "wall_seconds": self.wall_time(),
-            },
-            "batch_stats": self.batch_stats.state_dict(),
-            "history": self.history,
-            **self.evaluations.state_dict(),
-            "recording_id": self.recording_id,
         }
 
     def load_state_dict(self, state: dict) -> None:
         self.actor.load_state_dict(state["actor"])
         self.update.load_state_dict(state["update"])
         self.noise.load_state_dict(state["exploration"])
-        torch.set_rng_state(state["rng"]["torch"])
-        np.random.set_state(state["rng"]["numpy"])
-        self.frames = state["counters"]["frames"]
-        self.updates = state["counters"]["updates"]
-        self.wall_seconds = state["counters"]["wall_seconds"]
-        self.history = list(state["history"])
-        self.batch_stats.load_state_dict(state.get("batch_stats", {"recent": []}))
-        self.evaluations.load_state_dict(state)
-        self.recording_id = state["recording_id"]
-
-    def save(self) -> None:
-        save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
-
-    def close(self) -> None:
-        self.env.close()
+        self.load_common_state(state)

@@ -8,7 +8,7 @@ observation normalisation is fitted on the untrained policy's mean, i.e. the ref
 roll-outs, and kept for the run. Each batch is ``collector.frames_per_batch / num_envs`` steps of
 every env; the last step's state is carried to the next batch, so episodes run across batches
 (a drop is ``terminated``, the time limit ``truncated``: GAE bootstraps through it). The updates
-are TorchRL's ``GAE`` (recomputed every epoch) and ``ClipPPOLoss`` (advantages normalised, an L2
+are TorchRL's ``GAE`` (once per batch) and ``ClipPPOLoss`` (advantages normalised, an L2
 critic) over ``algo.epochs`` passes of minibatches of ``algo.minibatch_size``.
 
 It writes to the run directory
@@ -38,21 +38,19 @@ from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from tqdm import tqdm
 
+from jugglerl.batch.actor_training import ActorTraining
 from jugglerl.batch.batch_stats import BatchStats
-from jugglerl.batch.env_stack import fit_normalisation_on, make_env, normalisation
+from jugglerl.batch.env_stack import fit_normalisation_on, make_env
 from jugglerl.batch.evaluations import Evaluations
-from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.interrupts import deferred_interrupt
 from jugglerl.onpolicy.agent import make_agent, policy_sigma
 from jugglerl.onpolicy.checks import check_config
 from jugglerl.onpolicy.variants import training_variants
-from jugglerl.policies.actor import ActorPolicy
-from jugglerl.recording.blueprint import onpolicy_curves, training_blueprint
+from jugglerl.recording.blueprint import onpolicy_curves
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
-from jugglerl.run_files import METRICS, write_json
 from jugglerl.state.observation_parts import observed_parts
-from jugglerl.state.transforms import normalised_size, state_size, state_transforms
+from jugglerl.state.transforms import normalised_size, state_size
 from jugglerl.training import crossed
 from jugglerl_envs.batch import usable_cores
 
@@ -62,7 +60,7 @@ POSTFIX = ("throws_per_minute", "throws", "sigma")
 LOSS_KEYS = ("loss_objective", "loss_critic", "loss_entropy", "kl_approx", "clip_fraction")
 
 
-class PPOTraining:
+class PPOTraining(ActorTraining):
     """One PPO run; ``run()`` trains to ``collector.total_frames``. Pass the ``state`` of
     ``load_checkpoint(path)`` to resume it exactly."""
 
@@ -112,42 +110,10 @@ class PPOTraining:
             fit_normalisation_on(self.env, self.agent.actor, cfg.state.norm_frames, parts)
 
     # --- the loop -------------------------------------------------------------------------
-    def run(self, logger: RerunLogger, progress: bool = True) -> dict:
-        """Train to the frame budget, evaluate in full, return the final metrics. On Ctrl-C the
-        checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
-        self.run_dir.mkdir(parents=True, exist_ok=True)
-        logger.send_blueprint(training_blueprint(self.evaluations.curves))
-        total = self.cfg.collector.total_frames
-        bar = tqdm(total=total, initial=self.frames, unit="frame", disable=not progress)
+    def _train(self, logger: RerunLogger, bar: tqdm) -> None:
         bar.set_description(f"PPO {self.cfg.actor.name}")
-        self._session_start = time.monotonic()
-        try:
-            with bar:
-                while self.frames < total:
-                    self._iteration(logger, bar)
-        except KeyboardInterrupt:
-            self.save()
-            raise
-        self.wall_seconds = self.wall_time()
-        self._session_start = None
-        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
-        if self.evaluations.best is not None:
-            final["policy_frames"] = self.evaluations.best["frames"]
-        self.save()
-        metrics = {
-            "algo": self.cfg.algo.name,
-            "actor": self.cfg.actor.name,
-            "reward": self.cfg.env.reward,
-            "seed": self.cfg.seed,
-            "wall_seconds": round(self.wall_seconds, 1),
-            "frames": self.frames,
-            "updates": self.updates,
-            "final_evaluation": final,
-            "evaluations": self.evaluations.records,
-            "history": self.history,
-        }
-        write_json(self.run_dir / METRICS, metrics)
-        return metrics
+        while self.frames < self.cfg.collector.total_frames:
+            self._iteration(logger, bar)
 
     def _iteration(self, logger: RerunLogger, bar: tqdm) -> None:
         record = self._collect_and_learn()
@@ -157,7 +123,7 @@ class PPOTraining:
         bar.update(frames)
         if crossed(self.frames, frames, self.cfg.eval.every_frames):
             evaluation = self.evaluate(logger, self.cfg.eval.duration)
-            self.evaluations.keep_if_best(evaluation, self.agent.actor)
+            self.evaluations.keep_if_best(evaluation, self.current_actor())
         if crossed(self.frames, frames, self.cfg.checkpoint_every_frames):
             self.save()
 
@@ -201,10 +167,10 @@ class PPOTraining:
                 group["lr"] = optim.lr * (1 - done)
         parameters = list(self.loss.parameters())
         totals: dict[str, list[float]] = {key: [] for key in LOSS_KEYS}
+        with torch.no_grad():
+            self.advantage(batch)  # once per batch, with the critic that collected it
+        flat = batch.reshape(-1)
         for _ in range(algo.epochs):
-            with torch.no_grad():
-                self.advantage(batch)  # with the critic as it is now
-            flat = batch.reshape(-1)
             for indices in torch.randperm(flat.numel()).split(algo.minibatch_size):
                 losses = self.loss(flat[indices])
                 objective = sum(losses[k] for k in LOSS_KEYS[:3] if k in losses)
@@ -221,66 +187,23 @@ class PPOTraining:
         record["lr"] = self.optimizer.param_groups[0]["lr"]
         return record
 
-    def position(self) -> str:
-        return f"frame {self.frames}"
+    def label(self) -> str:
+        return f"PPO ({self.cfg.actor.name} actor, reward {self.cfg.env.reward})"
 
-    def summary(self, metrics: dict) -> str:
-        """One line on what the run reached."""
-        final = metrics["final_evaluation"]
-        return (
-            f"PPO ({self.cfg.actor.name} actor, reward {self.cfg.env.reward}) after"
-            f" {metrics['frames']} frames: catch rate {final['catch_rate']:.0%},"
-            f" {final['mean_throws']:.1f} throws, ball up {final['mean_time_to_drop']:.1f} s on"
-            f" average over {len(final['episodes'])} episodes of {final['duration']:g} s"
-        )
-
-    def wall_time(self) -> float:
-        """Seconds of training so far, this session's included."""
-        running = 0.0 if self._session_start is None else time.monotonic() - self._session_start
-        return self.wall_seconds + running
-
-    # --- evaluation -----------------------------------------------------------------------
-    def deployed_actor(self):
-        """The actor the final evaluation, the checkpoint's ``policy`` and ``evaluate.py`` run:
-        with ``eval.keep_best``, the one of the best periodic evaluation; else the current one."""
-        return self.evaluations.deployed(self.agent.actor)
-
-    def evaluate(
-        self, logger: RerunLogger, duration: float, actor=None, final: bool = False
-    ) -> dict:
-        """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
-        norm = normalisation(self.env)
-        transforms = state_transforms(
-            self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
-        )
-        policy = ActorPolicy(actor if actor is not None else self.agent.actor, transforms, {})
-        return self.evaluations.evaluate(policy, self.frames, logger, duration, final)
+    def current_actor(self):
+        return self.agent.actor
 
     # --- checkpoints ----------------------------------------------------------------------
     def state_dict(self) -> dict:
-        norm = normalisation(self.env)
         return {
-            **config_entries(self.cfg),
-            "deploys": "actor",
-            "policy": self.deployed_actor().state_dict(),
+            **self.common_state(),
             "agent": {
                 "policy": self.agent.policy.state_dict(),
                 "critic": self.agent.critic.state_dict(),
             },
             "optimizer": self.optimizer.state_dict(),
-            "normalisation": {"loc": norm.loc.clone(), "scale": norm.scale.clone()},
             "envs": self.env.base_env.batch.state_dict(),
             "carried": self.carried,
-            "rng": {"torch": torch.get_rng_state(), "numpy": np.random.get_state()},
-            "counters": {
-                "frames": self.frames,
-                "updates": self.updates,
-                "wall_seconds": self.wall_time(),
-            },
-            "batch_stats": self.batch_stats.state_dict(),
-            "history": self.history,
-            **self.evaluations.state_dict(),
-            "recording_id": self.recording_id,
         }
 
     def load_state_dict(self, state: dict) -> None:
@@ -289,21 +212,7 @@ class PPOTraining:
         self.optimizer.load_state_dict(state["optimizer"])
         self.env.base_env.batch.load_state_dict(state["envs"])
         self.carried = state["carried"]
-        torch.set_rng_state(state["rng"]["torch"])
-        np.random.set_state(state["rng"]["numpy"])
-        self.frames = state["counters"]["frames"]
-        self.updates = state["counters"]["updates"]
-        self.wall_seconds = state["counters"]["wall_seconds"]
-        self.history = list(state["history"])
-        self.batch_stats.load_state_dict(state["batch_stats"])
-        self.evaluations.load_state_dict(state)
-        self.recording_id = state["recording_id"]
-
-    def save(self) -> None:
-        save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
-
-    def close(self) -> None:
-        self.env.close()
+        self.load_common_state(state)
 
 
 def reward_terms(batch: TensorDict) -> dict[str, float]:
