@@ -299,6 +299,40 @@ def test_replay_buffer_rejects_a_batch_that_is_not_whole_slices():
         ReplayBuffer(1000, 100, slice_len=16)
 
 
+def trajectory_batch(ids: list[list[int]]) -> TensorDict:
+    """A collector batch ``[envs, time]`` whose steps carry the trajectory ids ``ids``."""
+    traj = torch.tensor(ids)
+    return TensorDict(
+        {"observation": traj.float().unsqueeze(-1), "collector": {"traj_ids": traj}},
+        batch_size=traj.shape,
+    )
+
+
+def test_a_slice_buffer_waits_for_a_piece_as_long_as_a_slice():
+    buffer = ReplayBuffer(100, 8, slice_len=4)
+    buffer.extend(trajectory_batch([[0, 0, 0], [1, 1, 1]]))
+    buffer.extend(trajectory_batch([[0, 0, 0], [1, 1, 1]]))  # env 0's piece follows env 1's
+    assert len(buffer) >= 8 and not buffer.ready and not buffer.sliceable
+    buffer.extend(trajectory_batch([[2, 2, 3], [4, 4, 4]]))
+    assert not buffer.ready
+    buffer.extend(trajectory_batch([[5, 5, 5], [6, 6, 6]]))  # 4, 4, 5, 5, 5: a piece of 3
+    assert not buffer.ready
+    buffer.extend(trajectory_batch([[7, 8, 8], [8, 8, 8]]))  # 8 runs on for 5 steps
+    assert buffer.ready
+    sample = buffer.sample()
+    assert sample.shape == (2, 4)
+    assert (sample["collector", "traj_ids"] == 8).all()
+
+
+def test_a_slice_buffer_of_one_env_joins_its_consecutive_batches():
+    buffer = ReplayBuffer(100, 4, slice_len=4)
+    buffer.extend(trajectory_batch([[5, 5, 5]]))
+    assert not buffer.ready
+    buffer.extend(trajectory_batch([[5, 5, 6]]))
+    assert buffer.ready
+    assert (buffer.sample()["observation"] == 5).all()
+
+
 def test_the_residual_experiment_composes_its_groups():
     cfg = train_config("+experiment=residual")
     assert (cfg.actor.name, cfg.env.reward, cfg.state.timestamp) == ("residual", "juggle", False)

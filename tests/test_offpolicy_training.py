@@ -109,6 +109,20 @@ def test_a_resumed_checkpoint_restores_networks_optimisers_exploration_and_clock
     restored.close()
 
 
+def test_updates_wait_while_the_buffer_holds_no_piece_as_long_as_a_slice(tmp_path, capsys):
+    # a resumed run starts without the buffer: an LSTM student that drops the ball early in
+    # every env leaves pieces too short for TorchRL's SliceSampler, which would raise
+    cfg = train_config(*TINY, "actor=lstm", "replay_buffer.slice_len=32")
+    training = OffPolicyTraining(cfg, tmp_path)
+    ids = torch.arange(8).repeat_interleave(16).reshape(2, 64)  # pieces of 16 steps
+    training.buffer.extend(TensorDict({"collector": {"traj_ids": ids}}, batch_size=[2, 64]))
+    assert len(training.buffer) >= cfg.replay_buffer.batch_size
+    assert training._learn() == {} and training._learn() == {}
+    note = "no episode piece of replay_buffer.slice_len=32 steps collected yet; the updates wait"
+    assert capsys.readouterr().err.count(note) == 1
+    training.close()
+
+
 def test_the_checkpoint_ships_the_target_actor_unless_told_otherwise(tmp_path):
     for target in (True, False):
         cfg = train_config(*TINY, f"eval.target_actor={target}")
@@ -219,6 +233,11 @@ def test_ctrl_c_twice_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
         (
             "actor=lstm replay_buffer.slice_len=128",
             "error: replay_buffer.slice_len=128 must be at most",
+        ),
+        (
+            "actor=lstm replay_buffer.slice_len=32 env.duration=0.5",
+            "error: replay_buffer.slice_len=32 must be at most the steps of an episode,"
+            " env.duration=0.5 s = 25 steps",
         ),
         ("+eval.perturbed.windy={gust:1}", "error: eval.perturbed.windy: env config:"),
         ("state.observe=[ball,elbow]", "error: state.observe=['ball', 'elbow']: one or more"),

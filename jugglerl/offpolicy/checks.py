@@ -23,4 +23,10 @@ def check_config(cfg: DictConfig) -> None:
             f"replay_buffer.slice_len={cfg.replay_buffer.slice_len} must be at most the steps"
             f" per env in a batch, collector.frames_per_batch / collector.num_envs = {steps}"
         )
+    episode = round(cfg.env.duration / (cfg.env.timestep * cfg.env.frame_skip))
+    if recurrent_state(cfg.actor) and cfg.replay_buffer.slice_len > episode:
+        raise ValueError(
+            f"replay_buffer.slice_len={cfg.replay_buffer.slice_len} must be at most the steps"
+            f" of an episode, env.duration={cfg.env.duration:g} s = {episode} steps"
+        )
     check_evaluations(cfg)

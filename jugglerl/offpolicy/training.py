@@ -98,6 +98,7 @@ class OffPolicyTraining(ActorTraining):
         self.history: list[dict] = []  # one record per collected batch
         self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
         self.recording_id: str | None = None
+        self._waiting = False  # told the user that the updates wait for a sliceable buffer
         # a checkpoint holds the loss and exploration of the stage it was saved in
         self._enter(first)
         if state is not None:
@@ -177,11 +178,16 @@ class OffPolicyTraining(ActorTraining):
     def _learn(self) -> dict:
         """The stage's ``optim.updates_per_batch`` updates once the buffer holds a batch; mean
         losses."""
-        ready = (
-            self.frames >= self.cfg.collector.init_random_frames
-            and len(self.buffer) >= self.cfg.replay_buffer.batch_size
-        )
-        if not ready:
+        if self.frames < self.cfg.collector.init_random_frames:
+            return {}
+        if not self.buffer.ready:
+            if len(self.buffer) >= self.cfg.replay_buffer.batch_size and not self._waiting:
+                self._waiting = True
+                print(
+                    f"note: no episode piece of replay_buffer.slice_len={self.buffer.slice_len}"
+                    " steps collected yet; the updates wait for one",
+                    file=sys.stderr,
+                )
             return {}
         self.update.bc_weight = self.stage.bc_weight_at(self.frames)
         self.update.actor_frozen = self.stage.actor_frozen(self.frames)
@@ -194,7 +200,7 @@ class OffPolicyTraining(ActorTraining):
     def _sample(self):
         """A batch from the replay buffer, ``demo_fraction`` of it from the demonstrations."""
         fraction = self.stage.demo_fraction
-        if fraction == 0 or len(self.demonstrations) == 0:
+        if fraction == 0 or not self.demonstrations.sliceable:
             return self.buffer.sample()
         demos = self.demonstrations.sample(fraction)
         return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
