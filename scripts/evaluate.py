@@ -23,12 +23,12 @@ from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episode
 from jugglerl.config import make_juggle_env
 from jugglerl.config_types import check_override_types
 from jugglerl.evaluation import EpisodeMetrics, summarise_episodes
-from jugglerl.policies.loading import load_policy
+from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.blueprint import episode_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import SUMMARY
-from jugglerl.recording.video import VideoRecorder, render_options
+from jugglerl.recording.video import VideoOptionError, VideoRecorder, render_options
 from jugglerl.run_files import write_json
 from jugglerl_envs import JuggleBatch
 from jugglerl_envs.validation import check_number
@@ -42,9 +42,11 @@ def main(cfg: DictConfig) -> None:
         check_number("seeds", cfg.seeds, 1, 100000, integer=True)
         env = make_juggle_env(cfg.env, duration=cfg.duration)
         cfg.env.duration = env.unwrapped.duration  # the recorded config: the episode's length
-        policy = load_policy(str(cfg.policy), env)
+        policy = load_named_policy("policy", cfg.policy, env)
         if cfg.video:
             env = VideoRecorder(env, run_dir / str(cfg.render.file), **render_options(cfg.render))
+    except VideoOptionError as error:
+        sys.exit(f"error: render.{error}")
     except ValueError as error:
         sys.exit(f"error: {error}")
 

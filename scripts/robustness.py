@@ -26,10 +26,11 @@ from tqdm import tqdm
 from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config import make_juggle_env
 from jugglerl.config_types import check_override_types
-from jugglerl.policies.loading import load_policy
+from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.reports import robustness
 from jugglerl.run_files import write_json
+from jugglerl_envs.validation import check_number
 
 ROOT = "robustness"
 
@@ -53,10 +54,12 @@ def main(cfg: DictConfig) -> None:
     policies = [str(p) for p in cfg.policies]
     try:
         check_override_types()
+        check_number("workers", cfg.workers, 0, 4096, integer=True)  # 0: one per core
+        check_number("seeds", cfg.seeds, 1, 100000, integer=True)
         families = robustness.families_from_config(cfg.families, cfg.env, cfg.select)
         with make_juggle_env(cfg.env) as template:  # a policy that cannot load names itself
             for policy in policies:
-                load_policy(policy, template)
+                load_named_policy("policies", policy, template)
         if cfg.reference not in policies:
             raise ValueError(f"reference={cfg.reference} must be one of policies={policies}")
         episodes = len(policies) * len(robustness.conditions(families)) * cfg.seeds

@@ -228,7 +228,10 @@ def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
     [
         ("algo.update=adam", "error: algo.update='adam' is not available; choose one of cmaes,"),
         ("algo.update=elite algo.elite=50", "error: algo.elite=50 must be <= algo.rollouts=4"),
-        ("algo.start=missing.yaml", "error: no policy file at missing.yaml; shipped policies:"),
+        (
+            "algo.start=missing.yaml",
+            "error: algo.start=missing.yaml: no policy file at missing.yaml; shipped policies:",
+        ),
         ("algo.lead_in=-1", "error: algo.lead_in=-1 is out of range"),
         ("algo.space=joint", "error: algo.space='joint' is not available; choose one of"),
         ("algo.reset_noise=0.5", "error: algo.reset_noise=0.5 is out of range"),

@@ -47,14 +47,17 @@ def test_evaluate_replays_a_command_file(tmp_path):
 def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
     rewards = ", ".join(REWARDS.names())
     for override, message in [
-        ("policy=missing_command", "error: no policy file at"),
+        ("policy=missing_command", "error: policy=missing_command: no policy file at"),
+        ("policy=", "error: policy is empty: give a shipped policy (closed_loop,"),
+        ("video=true render.fps=0", "error: render.fps=0 must be in (0, 50] (the env's steps)"),
+        ("video=true render.camera=top", "error: render.camera=top is not in the scene; cameras:"),
         ("duration=0", "error: duration=0 is out of range"),  # evaluate.py's own key
         (
             "env.reward=style",
             f"error: env.reward='style' is not available; choose one of {rewards}",
         ),
     ]:
-        result = run_evaluate(override, f"hydra.run.dir={tmp_path}")
+        result = run_evaluate(*override.split(), f"hydra.run.dir={tmp_path}")
         assert result.returncode != 0
         assert result.stderr.strip().startswith(message), result.stderr
         assert "Traceback" not in result.stderr

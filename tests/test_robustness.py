@@ -38,6 +38,11 @@ def test_families_come_from_config_with_their_nominal_values():
         ({"wind": {"key": "wind", "magnitudes": [1]}}, [], "wind is not an env argument"),
         ({"mass": {"key": "ball_mass"}}, [], "needs key and a non-empty magnitudes"),
         (FAMILIES, ["heat"], r"select=\['heat'\]: no such families; valid: kicks, mass"),
+        (
+            {"kicks": {"key": "kick_speed", "magnitudes": ["abc"]}},
+            [],
+            r"families.kicks.magnitudes=\['abc'\] must be numbers",
+        ),
     ],
 )
 def test_bad_families_are_named(families, select, message):
@@ -129,7 +134,22 @@ def test_the_script_names_an_unknown_policy(tmp_path):
         f"hydra.run.dir={tmp_path}",
     )
     assert result.returncode == 1
-    assert "juggler9000" in result.stderr and "Traceback" not in result.stderr
+    assert result.stderr.strip().startswith("error: policies=juggler9000: no policy file at")
+    assert "Traceback" not in result.stderr
+
+
+def test_a_bad_worker_count_is_named_before_any_episode(tmp_path):
+    result = run_script(
+        "robustness.py",
+        "policies=[expert]",
+        "reference=expert",
+        "workers=-1",
+        f"hydra.run.dir={tmp_path}",
+    )
+    assert result.returncode == 1
+    assert result.stderr.strip() == (
+        "error: workers=-1 is out of range: expected an integer in [0, 4096]"
+    )
 
 
 def test_a_policy_that_cannot_load_is_named_before_the_reference(tmp_path):

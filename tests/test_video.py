@@ -11,7 +11,7 @@ from PIL import Image
 
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.loading import load_policy
-from jugglerl.recording.video import VideoError, VideoRecorder
+from jugglerl.recording.video import VideoError, VideoOptionError, VideoRecorder
 from jugglerl_envs import JuggleEnv
 
 
@@ -63,15 +63,15 @@ def test_a_webp_loops_and_has_a_frame_per_period(tmp_path):
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"path": "clip.avi"}, "the suffix must be one of .mp4, .webp, .gif"),
-        ({"width": 641}, "video size must be even and positive, got 641 x 480"),
-        ({"fps": 60}, "video fps must be in (0, 50]"),
-        ({"camera": "top"}, "video camera 'top' is not in the scene"),
+        ({"path": "clip.avi"}, "file=clip.avi: the suffix must be one of .mp4, .webp, .gif"),
+        ({"width": 641}, "width=641, height=480: the size must be even and positive"),
+        ({"fps": 60}, "fps=60 must be in (0, 50]"),
+        ({"camera": "top"}, "camera=top is not in the scene; cameras: "),
     ],
 )
 def test_bad_video_options_are_one_line(tmp_path, options, message):
     arguments = {"path": tmp_path / "clip.mp4", **options}
-    with pytest.raises(VideoError, match=message.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(VideoOptionError, match=message.replace("(", r"\(").replace(")", r"\)")):
         VideoRecorder(JuggleEnv(), **arguments)
 
 

@@ -115,6 +115,7 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
             cfg.exploration, spec.get("exploration", {}), _who_acts(spec, cfg.exploration, where)
         )
         stage_cfg.optim = OmegaConf.merge(cfg.optim, spec.get("optim", {}))
+        _check_optim(stage_cfg.optim, spec.get("optim", {}), where)
         stage_cfg.optim.trains = str(spec.get("trains", "base"))
         stage_cfg.algo.n_steps = int(spec.get("n_steps", cfg.algo.get("n_steps", 1)))
         if stage_cfg.algo.n_steps < 1:
@@ -146,6 +147,22 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
 
 #: ``acts``: the weight of the teacher's action in the exploration's centred Gaussian
 ACTORS_WEIGHT = {"teacher": 1.0, "student": 0.0}
+
+
+def _check_optim(optim: DictConfig, stage_optim: Mapping, where: str) -> None:
+    """Positive learning rates, a whole number of updates per batch (0: the stage only
+    collects); an error names the stage's key where the stage sets it."""
+
+    def name(key: str) -> str:
+        return f"{where}.optim.{key}" if key in stage_optim else f"optim.{key}"
+
+    for key in ("lr_actor", "lr_critic"):
+        value = optim.get(key)
+        if value is not None and (not isinstance(value, int | float) or value <= 0):
+            raise ValueError(f"{name(key)}={value} must be a number > 0")
+    updates = optim.get("updates_per_batch")
+    if isinstance(updates, bool) or not isinstance(updates, int) or updates < 0:
+        raise ValueError(f"{name('updates_per_batch')}={updates} must be a whole number >= 0")
 
 
 def _who_acts(spec: Mapping, exploration: DictConfig, where: str) -> dict:

@@ -49,7 +49,7 @@ from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
 from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
-from jugglerl.policies.loading import load_policy
+from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
 from jugglerl.state.transforms import state_size
@@ -70,7 +70,7 @@ class OffPolicyTraining(ActorTraining):
         teacher = None
         if cfg.teacher.policy is not None:
             with make_juggle_env(cfg.env) as env:  # what the teacher reads, where it is timed
-                teacher = load_policy(str(cfg.teacher.policy), env)
+                teacher = load_named_policy("teacher.policy", cfg.teacher.policy, env)
                 if cfg.state.period == "teacher":  # resolved here: checkpoints keep the number
                     cfg.state.period = teacher_period(teacher, env)
         if cfg.state.period == "teacher":

@@ -30,6 +30,10 @@ class VideoError(ValueError):
     """A video that cannot be made here: no OpenGL for the renderer, a bad size or file name."""
 
 
+class VideoOptionError(VideoError):
+    """A bad option, its message starting with the option's ``render`` key: ``fps=0 must ...``."""
+
+
 class VideoRecorder(gym.Wrapper):
     """Renders every step of the wrapped ``JuggleEnv`` that falls on a grid of ``1 / fps``
     simulated seconds into ``path``, from the scene's camera ``camera``.
@@ -50,23 +54,26 @@ class VideoRecorder(gym.Wrapper):
         super().__init__(env)
         self.path = Path(path)
         if self.path.suffix not in FORMATS:
-            raise VideoError(
-                f"video file {self.path.name}: the suffix must be one of {', '.join(FORMATS)}"
+            raise VideoOptionError(
+                f"file={self.path.name}: the suffix must be one of {', '.join(FORMATS)}"
             )
         juggle = env.unwrapped
         step_rate = 1.0 / juggle.dt
         if not 0 < fps <= step_rate:
-            raise VideoError(
-                f"video fps must be in (0, {step_rate:g}] (the env's steps), got {fps}"
-            )
+            raise VideoOptionError(f"fps={fps} must be in (0, {step_rate:g}] (the env's steps)")
         if width <= 0 or height <= 0 or width % 2 or height % 2:
-            raise VideoError(f"video size must be even and positive, got {width} x {height}")
+            raise VideoOptionError(
+                f"width={width}, height={height}: the size must be even and positive"
+            )
         self._model = juggle.model
         self._data = juggle.data
         try:
             self._camera = self._model.camera(camera).id
         except KeyError:
-            raise VideoError(f"video camera {camera!r} is not in the scene") from None
+            cameras = [self._model.camera(i).name for i in range(self._model.ncam)]
+            raise VideoOptionError(
+                f"camera={camera} is not in the scene; cameras: {', '.join(cameras)}"
+            ) from None
         self._model.vis.global_.offwidth = max(self._model.vis.global_.offwidth, width)
         self._model.vis.global_.offheight = max(self._model.vis.global_.offheight, height)
         self._scratch = mujoco.MjData(self._model)

@@ -65,11 +65,17 @@ def families_from_config(
             )
         if family.key not in env_cfg:
             raise ValueError(f"families.{name}.key={family.key} is not an env argument")
+        try:
+            magnitudes = tuple(float(m) for m in family.magnitudes)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"families.{name}.magnitudes={list(family.magnitudes)} must be numbers"
+            ) from None
         families.append(
             Family(
                 name=str(name),
                 key=str(family.key),
-                magnitudes=tuple(float(m) for m in family.magnitudes),
+                magnitudes=magnitudes,
                 nominal=float(env_cfg[family.key]),
                 unit=str(family.get("unit", "")),
                 fixed=dict(family.get("fixed") or {}),

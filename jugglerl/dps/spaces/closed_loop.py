@@ -26,7 +26,7 @@ from jugglerl.dps.params import (
 )
 from jugglerl.dps.spaces import SPACES
 from jugglerl.policies.feedback import FIXED_NAMES, PARAM_NAMES, FeedbackPolicy
-from jugglerl.policies.loading import load_policy
+from jugglerl.policies.loading import load_named_policy
 
 
 @SPACES.register("closed_loop")
@@ -37,7 +37,7 @@ class CommandAndGainSpace(ClosedLoopSpace):
         super().__init__(cfg)
         algo = cfg.algo
         env = self.search_env()
-        start = load_policy(algo.start, env)
+        start = load_named_policy("algo.start", algo.start, env)
         if not isinstance(start, FeedbackPolicy):
             raise ValueError(f"algo.start={algo.start} is not a feedback policy (kind: feedback)")
         self.pan, self.lead_in = start.command.pan, start.command.lead_in

@@ -46,7 +46,10 @@ class ThrowCatchSpace(ClosedLoopSpace):
     def __init__(self, cfg: DictConfig):
         super().__init__(cfg)
         algo = cfg.algo
-        data, source = read_policy_file(algo.start)
+        try:
+            data, source = read_policy_file(algo.start)
+        except ValueError as error:
+            raise ValueError(f"algo.start={algo.start}: {error}") from None
         if data.get("kind") != "throw_catch":
             raise ValueError(f"algo.start={algo.start} is not a throw_catch policy file")
         self.template = throw_catch_from_dict(data, source)

@@ -44,7 +44,10 @@ class ViaPointSpace:
         algo = cfg.algo
         self.reset_noise = check_number("algo.reset_noise", algo.reset_noise, 0, MAX_RESET_NOISE)
         lead_in = check_number("algo.lead_in", algo.lead_in, 0.0)
-        start = load_command(algo.start)
+        try:
+            start = load_command(algo.start)
+        except ValueError as error:
+            raise ValueError(f"algo.start={algo.start}: {error}") from None
         self.pan, self.lead_in = start.pan, lead_in
         env = self.search_env()
         self.constraints = ViaPointConstraints.from_model(
