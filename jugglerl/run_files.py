@@ -8,9 +8,11 @@ cause, which the scripts print as one ``error: …`` line.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shutil
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO
@@ -56,3 +58,17 @@ def write_json(path: Path, data: object) -> None:
     """``data`` as indented JSON, atomically."""
     text = json.dumps(data, indent=2) + "\n"
     write_atomically(path, lambda file: file.write(text.encode()))
+
+
+def exits_on_run_file_errors(main: Callable) -> Callable:
+    """``main`` (a script's Hydra entry point) ending with one ``error: …`` line and exit code 1
+    when a run file cannot be written, wherever that happens, instead of a traceback."""
+
+    @functools.wraps(main)
+    def guarded(*args, **kwargs):
+        try:
+            return main(*args, **kwargs)
+        except RunFileError as error:
+            sys.exit(f"error: {error}")
+
+    return guarded

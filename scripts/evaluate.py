@@ -29,12 +29,13 @@ from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import SUMMARY
 from jugglerl.recording.video import VideoOptionError, VideoRecorder, render_options
-from jugglerl.run_files import write_json
+from jugglerl.run_files import exits_on_run_file_errors, write_json
 from jugglerl_envs import JuggleBatch
 from jugglerl_envs.validation import check_number
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="evaluate")
+@exits_on_run_file_errors
 def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     try:

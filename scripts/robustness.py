@@ -29,7 +29,7 @@ from jugglerl.config_types import check_override_types
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.reports import robustness
-from jugglerl.run_files import write_json
+from jugglerl.run_files import exits_on_run_file_errors, write_atomically, write_json
 from jugglerl_envs.validation import check_number
 
 ROOT = "robustness"
@@ -49,6 +49,7 @@ def log_to_rerun(logger: RerunLogger, rows: list[dict], table: str, plot_path: P
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="robustness")
+@exits_on_run_file_errors
 def main(cfg: DictConfig) -> None:
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     policies = [str(p) for p in cfg.policies]
@@ -84,7 +85,7 @@ def main(cfg: DictConfig) -> None:
     points = robustness.breaking_points(rows, cfg.reference, cfg.breaking_fraction)
     table = robustness.markdown(rows, families, points)
     run_dir.mkdir(parents=True, exist_ok=True)
-    (run_dir / "robustness.md").write_text(table)
+    write_atomically(run_dir / "robustness.md", lambda file: file.write(table.encode()))
     results = {
         "config": OmegaConf.to_container(cfg, resolve=True),
         "rows": rows,

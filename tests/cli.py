@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import resource
 import runpy
 import signal
 import subprocess
@@ -75,14 +76,20 @@ def run_short_search(algo: str, run_dir: Path, *overrides: str) -> subprocess.Co
 
 
 def run_script(
-    name: str, *overrides: str, timeout: float = 300, env: dict[str, str] | None = None
+    name: str,
+    *overrides: str,
+    timeout: float = 300,
+    env: dict[str, str] | None = None,
+    file_size_limit: int | None = None,
 ) -> subprocess.CompletedProcess:
     """``python scripts/<name> *overrides`` to completion, run from the repository root, with
-    ``env`` added to its environment."""
+    ``env`` added to its environment; with ``file_size_limit`` no file it writes may grow past
+    that many bytes (a write beyond fails as on a full disk)."""
     script = str(ROOT / "scripts" / name)
     with tempfile.TemporaryDirectory() as folder:
         out, err = Path(folder, "stdout"), Path(folder, "stderr")
-        child = _SERVER.Process(target=_run_as_main, args=(script, overrides, out, err, env))
+        arguments = (script, overrides, out, err, env, file_size_limit)
+        child = _SERVER.Process(target=_run_as_main, args=arguments)
         child.start()
         child.join(timeout)
         if child.exitcode is None:
@@ -95,13 +102,20 @@ def run_script(
 
 
 def _run_as_main(
-    script: str, overrides: tuple[str, ...], out: Path, err: Path, env: dict[str, str] | None
+    script: str,
+    overrides: tuple[str, ...],
+    out: Path,
+    err: Path,
+    env: dict[str, str] | None,
+    file_size_limit: int | None,
 ) -> None:
     """In the forked child: run ``script`` as ``__main__`` and exit with the interpreter's code."""
     os.chdir(ROOT)
     os.environ.update(env or {})
     for stream, path in ((1, out), (2, err)):
         os.dup2(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC), stream)
+    if file_size_limit is not None:  # Python ignores SIGXFSZ: a write past it raises EFBIG
+        resource.setrlimit(resource.RLIMIT_FSIZE, (file_size_limit, file_size_limit))
     sys.argv = [script, *overrides]
     code = 0
     try:

@@ -80,7 +80,10 @@ class RerunLogger(Logger):
         sinks = [rr.FileSink(str(self.path))]
         if self.live_url:
             sinks.append(rr.GrpcSink(self.live_url))
-        stream.set_sinks(*sinks)
+        try:
+            stream.set_sinks(*sinks)
+        except RuntimeError as error:  # the file sink's first write failed (a full disk)
+            raise failure(self.path, "write the recording", error) from None
         return stream
 
     @property

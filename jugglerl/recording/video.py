@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+from contextlib import contextmanager
 from fractions import Fraction
 from pathlib import Path
 
@@ -17,6 +18,8 @@ import av
 import gymnasium as gym
 import mujoco
 import numpy as np
+
+from jugglerl.run_files import RunFileError, failure
 
 #: suffix -> (codec, pixel format); H.264 needs even frame sizes (checked in ``VideoRecorder``).
 FORMATS = {
@@ -90,6 +93,7 @@ class VideoRecorder(gym.Wrapper):
         self._fps = Fraction(fps).limit_denominator(1000)
         self._container = None
         self._stream = None
+        self._failed: RunFileError | None = None  # the write that failed; no frame after it
         self._next_frame = math.inf
 
     def reset(self, **kwargs):
@@ -104,15 +108,28 @@ class VideoRecorder(gym.Wrapper):
         return observation, reward, terminated, truncated, info
 
     def close(self):
-        """Flush the encoder and close the file (a video with its frames so far), then the env."""
+        """Flush the encoder and close the file (a video with its frames so far), then the env.
+        A file that cannot be written raises ``RunFileError`` naming it; the encoder is then
+        left alone (libav may crash when a failed file is flushed or closed again)."""
+        container, self._container = self._container, None
         try:
-            if self._container is not None:
-                self._container.mux(self._stream.encode())
-                self._container.close()
-                self._container = None
+            if container is not None:
+                with self._writing():
+                    container.mux(self._stream.encode())
+                    container.close()
             self._renderer.close()
         finally:
             super().close()
+
+    @contextmanager
+    def _writing(self):
+        """A failed write of the video as ``RunFileError``; the encoder is not used again."""
+        try:
+            yield
+        except OSError as error:
+            self._container = None
+            self._failed = failure(self.path, "write the video", error)
+            raise self._failed from None
 
     def _frame(self, time: float) -> None:
         if time < self._next_frame - 1e-9:
@@ -128,11 +145,14 @@ class VideoRecorder(gym.Wrapper):
         return self._renderer.render()
 
     def _encode(self, pixels: np.ndarray) -> None:
+        if self._failed is not None:
+            raise self._failed
         if self._container is None:
             self._open(pixels.shape[1], pixels.shape[0])
         frame = av.VideoFrame.from_ndarray(pixels, format="rgb24")
         frame.pts = self.frames
-        self._container.mux(self._stream.encode(frame))
+        with self._writing():
+            self._container.mux(self._stream.encode(frame))
         self.frames += 1
 
     def _open(self, width: int, height: int) -> None:

@@ -23,6 +23,7 @@ from omegaconf import DictConfig, OmegaConf
 from jugglerl.cluster.episode_pool import EpisodePool, EpisodeTask
 from jugglerl.config import make_juggle_env
 from jugglerl.policies.loading import load_policy
+from jugglerl.run_files import write_atomically
 
 NOMINAL = "nominal"
 
@@ -270,6 +271,8 @@ def plot(rows: list[dict], families: list[Family], path: Path) -> Path:
     axes[0][0].set_ylabel("mean throws")
     axes[0][-1].legend(fontsize="small")
     figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
+    try:
+        write_atomically(Path(path), lambda file: figure.savefig(file, dpi=100, format="png"))
+    finally:
+        plt.close(figure)
     return path
