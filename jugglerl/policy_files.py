@@ -60,6 +60,22 @@ def policy_file(name_or_path: str | Path) -> Path:
     return path
 
 
+def check_policy_named(key: str, spec: str | Path) -> None:
+    """``PolicyFileError`` starting ``key=spec:`` when the config key ``key`` names no policy:
+    an empty value, or a name or path with no file behind it (a run directory is checked when
+    its checkpoint is loaded, a file's content when it is read: those errors name the file)."""
+    if not str(spec).strip():
+        raise PolicyFileError(
+            f"{key} is empty: give a shipped policy ({', '.join(shipped_names())}), a policy file"
+            " or a run directory"
+        )
+    if not names_a_run(spec):
+        try:
+            policy_file(spec)
+        except PolicyFileError as error:
+            raise PolicyFileError(f"{key}={spec}: {error}") from None
+
+
 def names_a_run(spec: str | Path) -> bool:
     """Whether a ``policy=``/``init_actor=`` argument names a training run (its directory or a
     ``.pt`` checkpoint) rather than a policy name or file."""

@@ -13,7 +13,12 @@ from jugglerl.policies.actor_file import actor_policy_from_dict, check_gravity
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
 from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
-from jugglerl.policy_files import PolicyFileError, names_a_run, read_policy_file, shipped_names
+from jugglerl.policy_files import (
+    PolicyFileError,
+    check_policy_named,
+    names_a_run,
+    read_policy_file,
+)
 from jugglerl.run_files import METRICS
 
 #: Policy file kinds and their readers (``data, source, env -> Policy``).
@@ -45,17 +50,10 @@ def load_policy(spec: str, env: gym.Env) -> Policy:
 
 
 def load_named_policy(key: str, spec, env: gym.Env) -> Policy:
-    """``load_policy`` for the config key ``key`` (``policy``, ``teacher.policy``, ...): its
-    one-line errors start with ``key=spec``."""
-    if not str(spec).strip():
-        raise PolicyFileError(
-            f"{key} is empty: give a shipped policy ({', '.join(shipped_names())}), a policy file"
-            " or a run directory"
-        )
-    try:
-        return load_policy(str(spec), env)
-    except ValueError as error:
-        raise PolicyFileError(f"{key}={spec}: {error}") from None
+    """``load_policy`` for the config key ``key`` (``policy``, ``teacher.policy``, ...): a value
+    that names no policy is an error that names the key."""
+    check_policy_named(key, spec)
+    return load_policy(str(spec), env)
 
 
 def _run_policy(path: Path, env: gym.Env) -> Policy:

@@ -32,7 +32,7 @@ from jugglerl.policies.throw_catch import (
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
-from jugglerl.policy_files import read_policy_file
+from jugglerl.policy_files import check_policy_named, read_policy_file
 
 #: The scalars after the knots, in θ order; ``lead`` and ``still`` only where the start has them.
 SCALARS = ("catch_height", "settle", "carry", "lead", "still")
@@ -46,10 +46,8 @@ class ThrowCatchSpace(ClosedLoopSpace):
     def __init__(self, cfg: DictConfig):
         super().__init__(cfg)
         algo = cfg.algo
-        try:
-            data, source = read_policy_file(algo.start)
-        except ValueError as error:
-            raise ValueError(f"algo.start={algo.start}: {error}") from None
+        check_policy_named("algo.start", algo.start)
+        data, source = read_policy_file(algo.start)
         if data.get("kind") != "throw_catch":
             raise ValueError(f"algo.start={algo.start} is not a throw_catch policy file")
         self.template = throw_catch_from_dict(data, source)

@@ -28,6 +28,7 @@ from jugglerl.dps.params import (
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.dps.spaces import SPACES
 from jugglerl.policies.command import CommandPolicy
+from jugglerl.policy_files import check_policy_named
 from jugglerl_envs.settings import MAX_RESET_NOISE
 from jugglerl_envs.validation import check_number
 
@@ -44,10 +45,8 @@ class ViaPointSpace:
         algo = cfg.algo
         self.reset_noise = check_number("algo.reset_noise", algo.reset_noise, 0, MAX_RESET_NOISE)
         lead_in = check_number("algo.lead_in", algo.lead_in, 0.0)
-        try:
-            start = load_command(algo.start)
-        except ValueError as error:
-            raise ValueError(f"algo.start={algo.start}: {error}") from None
+        check_policy_named("algo.start", algo.start)
+        start = load_command(algo.start)
         self.pan, self.lead_in = start.pan, lead_in
         env = self.search_env()
         self.constraints = ViaPointConstraints.from_model(
