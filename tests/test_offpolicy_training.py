@@ -240,9 +240,18 @@ def test_ctrl_c_twice_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
             " env.duration=0.5 s = 25 steps",
         ),
         ("+eval.perturbed.windy={gust:1}", "error: eval.perturbed.windy: env config:"),
-        ("optim.lr_actor=-1", "error: optim.lr_actor=-1 must be a number > 0"),
-        ("optim.updates_per_batch=-1", "error: optim.updates_per_batch=-1 must be a whole number"),
-        ("state.period=-1", "error: state.period=-1 must be positive seconds"),
+        (
+            "optim.lr_actor=-1",
+            "error: optim.lr_actor=-1 is out of range: expected a number in (0, inf]",
+        ),
+        (
+            "optim.updates_per_batch=-1",
+            "error: optim.updates_per_batch=-1 is out of range: expected an integer in [0,",
+        ),
+        (
+            "state.period=-1",
+            "error: state.period=-1 is out of range: expected a number in (0, inf]",
+        ),
         ("teacher.policy=nope", "error: teacher.policy=nope: no policy file at"),
         ("state.observe=[ball,elbow]", "error: state.observe=['ball', 'elbow']: one or more"),
         ("env.duration=0", "error: env.duration=0 is out of range"),

@@ -36,6 +36,8 @@ from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
+from jugglerl_envs.validation import check_number
+
 STAGE_KEYS = {
     "name",
     "until",
@@ -157,12 +159,9 @@ def _check_optim(optim: DictConfig, stage_optim: Mapping, where: str) -> None:
         return f"{where}.optim.{key}" if key in stage_optim else f"optim.{key}"
 
     for key in ("lr_actor", "lr_critic"):
-        value = optim.get(key)
-        if value is not None and (not isinstance(value, int | float) or value <= 0):
-            raise ValueError(f"{name(key)}={value} must be a number > 0")
-    updates = optim.get("updates_per_batch")
-    if isinstance(updates, bool) or not isinstance(updates, int) or updates < 0:
-        raise ValueError(f"{name('updates_per_batch')}={updates} must be a whole number >= 0")
+        if optim.get(key) is not None:
+            check_number(name(key), optim[key], 0, low_open=True)
+    check_number(name("updates_per_batch"), optim.get("updates_per_batch"), 0, integer=True)
 
 
 def _who_acts(spec: Mapping, exploration: DictConfig, where: str) -> dict:

@@ -21,6 +21,7 @@ from jugglerl.state.observation_parts import (
     observed_parts,
 )
 from jugglerl.state.timestamp import TimestampFeatures, num_time_features
+from jugglerl_envs.validation import check_number
 
 
 def _harmonics(state_cfg: DictConfig) -> int:
@@ -60,10 +61,8 @@ def state_transforms(
     norm = ObservationNorm(loc=loc, scale=scale, in_keys=["state"], standard_normal=True)
     transforms.append(norm)
     harmonics = _harmonics(state_cfg)
-    period = state_cfg.get("period")
-    timed = state_cfg.timestamp or state_cfg.get("ball_clock")
-    if timed and (isinstance(period, bool) or not isinstance(period, int | float) or period <= 0):
-        raise ValueError(f"state.period={period} must be positive seconds")
+    if state_cfg.timestamp or state_cfg.get("ball_clock"):
+        check_number("state.period", state_cfg.get("period"), 0, low_open=True)
     if state_cfg.timestamp:
         transforms.append(TimestampFeatures(duration, state_cfg.period, harmonics))
     if state_cfg.get("ball_clock"):
