@@ -123,7 +123,7 @@ def returns_written(path: Path) -> list[float]:
         return []
     try:
         return column(path, "train/return", *SCALAR)[1].ravel().tolist()
-    except RuntimeError:  # the file ends midway through a frame: the server is writing it
+    except (RuntimeError, ValueError):  # the server has not yet written a whole recording
         return []
 
 
