@@ -64,7 +64,7 @@ def check_policy_named(key: str, spec: str | Path) -> None:
     """``PolicyFileError`` starting ``key=spec:`` when the config key ``key`` names no policy:
     an empty value, or a name or path with no file behind it (a run directory is checked when
     its checkpoint is loaded, a file's content when it is read: those errors name the file)."""
-    if not str(spec).strip():
+    if spec is None or not str(spec).strip():
         raise PolicyFileError(
             f"{key} is empty: give a shipped policy ({', '.join(shipped_names())}), a policy file"
             " or a run directory"

@@ -14,14 +14,14 @@ from torchrl.modules import set_recurrent_mode
 
 from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.commands import load_command
-from jugglerl.networks.actors import build_actor, recurrent_state
+from jugglerl.networks.actors import build_actor
 from jugglerl.networks.reference import CommandReference
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.exploration.gaussian import CentredGaussianNoise, CommandCentre
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.state.timestamp import TimestampFeatures, time_features
-from jugglerl.state.transforms import state_size, state_transforms
+from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv
 
 SMALL = ["algo=ddpg", "env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]
@@ -224,20 +224,36 @@ def test_actor_policy_acts_as_the_actor_does_in_the_env_stack(actor_name, state)
     with set_exploration_type(ExplorationType.DETERMINISTIC), torch.no_grad():
         data = env.rollout(100, actor)
     norm = normalisation(env)
-    policy = ActorPolicy(
-        actor,
-        state_transforms(cfg.state, cfg.env.duration, norm.loc, norm.scale),
-        recurrent_state(cfg.actor),
+    policy = ActorPolicy.of_actor(
+        actor, cfg.state, cfg.actor, cfg.env.duration, norm.loc, norm.scale
     )
     plain = JuggleEnv(duration=cfg.env.duration, reward=cfg.env.reward)
     observation, info = plain.reset(seed=0)
     policy.reset()
     for step in range(len(data[0])):
         action = policy.act(observation, info["time"])
-        np.testing.assert_allclose(action, data["action"][0, step].numpy(), atol=1e-5)
+        np.testing.assert_array_equal(action, data["action"][0, step].numpy())
         observation, _, terminated, truncated, info = plain.step(action)
         if terminated or truncated:
             break
+
+
+@pytest.mark.parametrize("actor_name", ["mlp", "lstm"])
+def test_actor_policy_acts_on_a_batch_as_the_env_stack_does(actor_name):
+    cfg, env, actor = stack(
+        f"actor={actor_name}", "collector.num_envs=4", "state.ball_clock=true", "env.duration=2"
+    )
+    with set_exploration_type(ExplorationType.DETERMINISTIC), torch.no_grad():
+        data = env.rollout(80, actor)  # stops when an env is done: no env resets on the way
+    assert data.shape[1] > 10
+    norm = normalisation(env)
+    policy = ActorPolicy.of_actor(
+        actor, cfg.state, cfg.actor, cfg.env.duration, norm.loc, norm.scale
+    )
+    for step in range(data.shape[1]):  # four envs in one call, from what the stack observed
+        row = data[:, step]
+        actions = policy.act(row["observation"].numpy(), row["time"].numpy())
+        np.testing.assert_array_equal(actions, row["action"].numpy())
 
 
 def test_unknown_actor_is_named():

@@ -209,11 +209,8 @@ def test_a_run_starts_from_a_shipped_actor(tmp_path):
     shipped = read_actor_weights("lstm_juggler")
     for key, value in shipped["policy"].items():
         assert torch.equal(training.actor.state_dict()[key], value)
-    norm = training.actor_policy(training.actor).transforms
-    assert any(
-        torch.equal(getattr(t, "loc", torch.empty(0)), shipped["normalisation"]["loc"])
-        for t in norm
-    )
+    encoder = training.actor_policy(training.actor).deployed.encoder
+    assert torch.equal(encoder.loc, shipped["normalisation"]["loc"])
     training.close()
     other = train_config(*tiny, "state.period=3.0")
     with pytest.raises(ValueError, match="init_actor=lstm_juggler: its state differs in period"):

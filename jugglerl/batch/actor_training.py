@@ -21,12 +21,10 @@ from tqdm import tqdm
 
 from jugglerl.batch.env_stack import normalisation
 from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
-from jugglerl.networks.actors import recurrent_state
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.run_files import METRICS, write_json
-from jugglerl.state.transforms import state_transforms
 
 
 class ActorTraining:
@@ -110,10 +108,9 @@ class ActorTraining:
     def actor_policy(self, actor) -> ActorPolicy:
         """``actor`` as a deterministic ``Policy`` on plain Gymnasium envs and batches."""
         norm = normalisation(self.env)
-        transforms = state_transforms(
-            self.cfg.state, self.cfg.env.duration, norm.loc.clone(), norm.scale.clone()
+        return ActorPolicy.of_actor(
+            actor, self.cfg.state, self.cfg.actor, self.cfg.env.duration, norm.loc, norm.scale
         )
-        return ActorPolicy(actor, transforms, recurrent_state(self.cfg.actor))
 
     def evaluate(
         self, logger: RerunLogger, duration: float, actor=None, final: bool = False

@@ -17,9 +17,8 @@ This transform measures that event from the observation, as the teacher does, an
 
 It is sensing, not control: the clock is a function of the observed ball and cup. Its memory
 (the last lock time and whether it is armed) travels in the tensordict as ``ball_clock_lock``
-and ``ball_clock_armed`` (``carried_keys``), so batched envs reset per env and
-``jugglerl.policies.actor.ActorPolicy`` carries it from step to step as it carries an LSTM's
-state.
+and ``ball_clock_armed`` (``carried_keys``), so batched envs reset per env; a deployed actor's
+encoder (``jugglerl.state.encoder``) runs the same ``clock_step`` on plain tensors.
 """
 
 from __future__ import annotations
@@ -40,6 +39,27 @@ ARMED = "ball_clock_armed"
 
 def num_ball_clock_features(harmonics: int) -> int:
     return 2 * harmonics
+
+
+def clock_step(
+    observation: torch.Tensor,
+    time: torch.Tensor,
+    fresh: torch.Tensor,
+    lock: torch.Tensor,
+    armed: torch.Tensor,
+    height: float,
+    rearm: float,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """The clock's memory after one observation: ``(lock, armed)`` from the last step's (both of
+    ``time``'s shape; ``fresh`` envs start over at ``time``)."""
+    lock = torch.where(fresh, time, lock)
+    armed = armed | fresh
+    above = observation[..., BALL_Z] - observation[..., CUP_Z]
+    closing = (observation[..., CUP_VZ] - observation[..., BALL_VZ]).clamp(min=1e-3)
+    crossing = armed & (above < height) & (observation[..., BALL_VZ] < 0)
+    lock = torch.where(crossing, time - (height - above) / closing, lock)
+    armed = (armed & ~crossing) | (above > height + rearm)
+    return lock, armed
 
 
 class BallClock(Transform):
@@ -65,13 +85,15 @@ class BallClock(Transform):
         armed = tensordict.get(ARMED, None)
         if lock is None:
             lock, armed = time.clone(), torch.ones(batch, dtype=torch.bool)
-        lock = torch.where(fresh, time, lock.reshape(batch))
-        armed = armed.reshape(batch) | fresh
-        height = observation[..., BALL_Z] - observation[..., CUP_Z]
-        closing = (observation[..., CUP_VZ] - observation[..., BALL_VZ]).clamp(min=1e-3)
-        crossing = armed & (height < self.height) & (observation[..., BALL_VZ] < 0)
-        lock = torch.where(crossing, time - (self.height - height) / closing, lock)
-        armed = (armed & ~crossing) | (height > self.height + self.rearm)
+        lock, armed = clock_step(
+            observation,
+            time,
+            fresh,
+            lock.reshape(batch),
+            armed.reshape(batch),
+            self.height,
+            self.rearm,
+        )
         state = tensordict.get("state")
         features = phase_features(time - lock, self.period, self.harmonics).to(state.dtype)
         tensordict.set(LOCK, lock)

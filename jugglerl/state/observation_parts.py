@@ -37,6 +37,8 @@ OBSERVED = {
     "cup": slice(12, 15),
     "cup_velocity": slice(15, 18),
 }
+#: The values the parts are cut from: the one-ball observation.
+OBSERVED_SIZE = max(part.stop for part in OBSERVED.values())
 #: The whole observation in its order: the default, and a selection that needs no cutting.
 WHOLE_OBSERVATION = tuple(OBSERVED)
 #: Every part there is, each of three values.
