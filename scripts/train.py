@@ -1,7 +1,8 @@
 """Train a juggling policy; everything lands in the run directory.
 
-python scripts/train.py                                       # BC, then DAgger, from closed_loop
-python scripts/train.py actor=lstm                            # the same with the LSTM actor
+python scripts/train.py                                       # LSTM clone of closed_loop_centred
+python scripts/train.py actor=lstm                            # the same (the Quickstart's command)
+python scripts/train.py actor=mlp                             # the same with an MLP actor
 python scripts/train.py algo=ddpg actor=lstm reward=contacts  # DDPG alone, the paper's reward 3
 python scripts/train.py algo=td3 actor=lstm                   # TD3 (twin critics, delayed actor)
 python scripts/train.py algo=bc teacher.policy=closed_loop    # behaviour cloning of a teacher

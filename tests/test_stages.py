@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 import torch
 from cli import run_script, train_config
+from omegaconf import OmegaConf
 from tensordict import TensorDict
 from test_offpolicy_training import TINY, train
 
 from jugglerl.checkpoints import load_checkpoint
-from jugglerl.offpolicy.stages import resume_note, stages_from_config
+from jugglerl.offpolicy.stages import StopRule, resume_note, stages_from_config, stopped_early
 from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.policies.loading import load_policy
@@ -23,6 +24,7 @@ from jugglerl_envs import JuggleEnv
 STAGED = [
     *TINY,
     "algo=apprentice",
+    "actor=mlp",
     "collector.total_frames=384",
     "algo.stages.0.until=128",
     "algo.stages.1.until=256",
@@ -64,6 +66,14 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     )
     short = stages_from_config(train_config("algo=apprentice", "collector.total_frames=340000"))
     assert [(s.name, s.end) for s in short] == [("bc", 327680), ("dagger", 340000)]
+
+
+def test_plain_train_py_composes_the_quickstarts_lstm_apprentice():
+    plain, quickstart = train_config(), train_config("actor=lstm")
+    assert OmegaConf.to_yaml(plain) == OmegaConf.to_yaml(quickstart)
+    assert plain.algo.name == "apprentice" and plain.actor.name == "lstm"
+    assert train_config("actor=mlp").actor.name == "mlp"  # the command line still chooses
+    assert train_config("algo=ddpg").actor.name == "mlp"  # and the other algorithms keep theirs
 
 
 def test_who_acts_and_the_noise_are_the_centred_gaussian_they_stand_for():
@@ -301,6 +311,7 @@ def test_the_phase_features_follow_the_teachers_cycle_and_a_resume_keeps_the_che
 EARTH_STAGED = [
     *(override for override in TINY if not override.startswith("algo=")),
     "+experiment=earth_apprentice",
+    "actor=mlp",
     "env.duration=8",  # the teacher throws 4 times: enough to time its cycle
     "collector.num_envs=4",
     "collector.frames_per_batch=128",
@@ -330,3 +341,98 @@ def test_the_earth_pipeline_clones_earth_juggler_with_three_arms_and_resumes_in_
     assert [h["stage"] for h in metrics["history"]] == [0, 1] and again.stage.name == "dagger"
     assert again.cfg.state.period == period and again.frames == 256
     again.close()
+
+
+# --- early stops --------------------------------------------------------------------------------
+def evaluation(frames: int, throws: float, caught: float = 1.0, perturbed: float | None = None):
+    """A hand-made evaluation record of 120-s nominal episodes (and one 30-s condition)."""
+    record = {"frames": frames, "duration": 120.0, "catch_rate": caught}
+    record |= {"mean_throws": throws, "mean_time_to_drop": 120.0 * caught}
+    if perturbed is not None:
+        condition = {"duration": 30.0, "mean_throws": perturbed, "mean_time_to_drop": 30.0}
+        record["perturbed"] = {"kicks": condition}
+    return record
+
+
+def test_a_stop_rule_ends_a_stage_on_its_target_or_when_evaluations_stop_improving():
+    target = StopRule(throws=52)
+    assert target.reason([evaluation(1, 51)]) is None
+    assert target.reason([evaluation(1, 60, caught=0.0)]) is None  # the ball must be caught
+    assert "scored 52.0 throws (stop.throws=52)" in target.reason([evaluation(1, 52)])
+    # perturbed throws count as over the nominal length: (56 + 4 * 11) / 2 = 50, then 52
+    assert target.reason([evaluation(1, 56, perturbed=11)]) is None
+    assert target.reason([evaluation(1, 56, perturbed=12)]) is not None
+    patient = StopRule(patience=2)
+    history = [evaluation(1, 10), evaluation(2, 30), evaluation(3, 29)]
+    assert patient.reason(history) is None  # one evaluation since the best
+    assert "2 evaluations without a better one" in patient.reason([*history, evaluation(4, 30)])
+    assert patient.reason([*history, evaluation(4, 31)]) is None
+
+
+def test_a_stage_that_stops_early_moves_the_later_ones_and_keeps_their_lengths():
+    stages = stages_from_config(train_config("algo=apprentice", "collector.total_frames=491520"))
+    bc, dagger, rl = stopped_early(stages, {0: 81920})
+    assert (bc.start, bc.end) == (0, 81920)
+    assert (dagger.start, dagger.end) == (81920, 81920 + 40960)
+    assert rl.end - rl.start == stages[2].end - stages[2].start and dagger.end == rl.start
+    bc, dagger, rl = stopped_early(stages, {0: 81920, 1: 102400})
+    assert (dagger.end, rl.start, rl.end) == (102400, 102400, 102400 + 491520 - 368640)
+
+
+@pytest.mark.parametrize(
+    "stop, message",
+    [
+        ("{throws: 0}", "algo.stages[0].stop.throws=0 is out of range"),
+        ("{patience: 0}", "algo.stages[0].stop.patience=0 is out of range"),
+        ("{throws: 52, after: 3}", "algo.stages[0].stop: a mapping of throws and/or patience"),
+        ("3", "algo.stages[0].stop: a mapping of throws and/or patience"),
+    ],
+)
+def test_bad_stop_rules_are_named(stop, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        stages_from_config(train_config("algo=apprentice", f"algo.stages.0.stop={stop}"))
+
+
+#: BC evaluated after every batch of 128 frames and told to stop at its second evaluation that
+#: is no better than its first (an untrained actor's evaluations tie at zero throws).
+STOPPING = [
+    *STAGED,
+    "collector.total_frames=1280",
+    "algo.stages.0.until=1024",
+    "algo.stages.1.until=1152",
+    "eval.every_frames=128",
+    "eval.seeds=1",
+    "algo.stages.0.stop={patience: 1}",
+]
+
+
+def test_an_early_stop_ends_the_stage_between_batches_and_a_resume_goes_on_to_the_next(
+    tmp_path, monkeypatch, capsys
+):
+    cfg = train_config(*STOPPING)
+    metrics, training = train(cfg, tmp_path / "whole")
+    # BC stops at its second evaluation (frame 256); DAgger keeps its 128 frames, the RL stage
+    # its 128: the run ends 768 frames early
+    stages = [(h["frames"], h["stage"]) for h in metrics["history"]]
+    assert stages == [(128, 0), (256, 0), (384, 1), (512, 2)]
+    assert metrics["frames"] == 512 and training.stops == {0: 256}
+    assert "note: stage bc ends at frame 256, 768 frames early" in capsys.readouterr().err
+    assert set(metrics["seconds"]["stages"]) == {"bc", "dagger", "rl"}
+    assert {"collect", "update", "evaluate", "checkpoint"} <= set(metrics["seconds"]["parts"])
+
+    saved = OffPolicyTraining.save
+
+    def killed_after_the_stop(self):  # the run dies right after the stop's checkpoint
+        saved(self)
+        if self.stops:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(OffPolicyTraining, "save", killed_after_the_stop)
+    with pytest.raises(KeyboardInterrupt):
+        train(cfg, tmp_path / "killed")
+    monkeypatch.setattr(OffPolicyTraining, "save", saved)
+    state = load_checkpoint(tmp_path / "killed")
+    assert state["counters"]["frames"] == 256 and state["stopped_early"] == {0: 256}
+    resumed, again = train(cfg, tmp_path / "killed", state)
+    assert [(h["frames"], h["stage"]) for h in resumed["history"]] == stages
+    assert again.stage.name == "rl" and resumed["frames"] == 512

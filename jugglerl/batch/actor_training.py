@@ -6,13 +6,17 @@ holds beyond ``common_state`` (``state_dict``, ``load_state_dict``); this base r
 its progress bar, saves on Ctrl-C, evaluates the deployed actor in full at the end
 (``jugglerl.batch.evaluations``), writes ``metrics.json`` and keeps the wall time over resumed
 sessions. It expects ``cfg``, ``run_dir``, ``env`` (the env stack), ``evaluations``,
-``batch_stats``, ``frames``, ``updates``, ``wall_seconds``, ``_session_start`` (``None`` unless
-``run()`` trains), ``history`` and ``recording_id``.
+``batch_stats``, ``frames``, ``updates``, ``wall_seconds``, ``seconds`` (``{}``: where the time
+went, ``timed``), ``_session_start`` (``None`` unless ``run()`` trains), ``history`` and
+``recording_id``.
 """
 
 from __future__ import annotations
 
+import copy
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 import torch
@@ -50,8 +54,9 @@ class ActorTraining:
         checkpoint is brought up to date before ``KeyboardInterrupt`` propagates."""
         self.run_dir.mkdir(parents=True, exist_ok=True)
         logger.send_blueprint(training_blueprint(self.evaluations.curves))
-        total = self.cfg.collector.total_frames
-        bar = tqdm(total=total, initial=self.frames, unit="frame", disable=not progress)
+        bar = tqdm(
+            total=self.frame_budget(), initial=self.frames, unit="frame", disable=not progress
+        )
         self._session_start = time.monotonic()
         try:
             with bar:
@@ -61,7 +66,8 @@ class ActorTraining:
             raise
         self.wall_seconds = self.wall_time()
         self._session_start = None
-        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
+        with self.timed("final evaluation"):
+            final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
         if self.evaluations.best is not None:
             final["policy_frames"] = self.evaluations.best["frames"]
         self.save()
@@ -72,6 +78,10 @@ class ActorTraining:
             "reward": self.cfg.env.reward,
             "seed": self.cfg.seed,
             "wall_seconds": round(self.wall_seconds, 1),
+            "seconds": {
+                kind: {part: round(spent, 1) for part, spent in parts.items()}
+                for kind, parts in self.seconds.items()
+            },
             "frames": self.frames,
             "updates": self.updates,
             "final_evaluation": final,
@@ -80,6 +90,26 @@ class ActorTraining:
         }
         write_json(self.run_dir / METRICS, metrics)
         return metrics
+
+    @contextmanager
+    def timed(self, part: str, kind: str = "parts") -> Iterator[None]:
+        """Add the block's wall seconds to ``seconds[kind][part]`` (``parts``: collect, update,
+        evaluate, checkpoint; ``stages``: the off-policy stages), kept in checkpoints and
+        written to ``metrics.json``."""
+        start = time.monotonic()
+        try:
+            yield
+        finally:
+            self.spent(part, start, kind)
+
+    def spent(self, part: str, since: float, kind: str = "parts") -> None:
+        """Add the wall seconds from ``since`` (``time.monotonic()``) to ``seconds[kind][part]``."""
+        seconds = self.seconds.setdefault(kind, {})
+        seconds[part] = seconds.get(part, 0.0) + time.monotonic() - since
+
+    def frame_budget(self) -> int:
+        """The frames the run trains for."""
+        return self.cfg.collector.total_frames
 
     def position(self) -> str:
         return f"frame {self.frames}"
@@ -135,6 +165,7 @@ class ActorTraining:
                 "frames": self.frames,
                 "updates": self.updates,
                 "wall_seconds": self.wall_time(),
+                "seconds": copy.deepcopy(self.seconds),
             },
             "batch_stats": self.batch_stats.state_dict(),
             "history": self.history,
@@ -150,6 +181,7 @@ class ActorTraining:
         self.frames = state["counters"]["frames"]
         self.updates = state["counters"]["updates"]
         self.wall_seconds = state["counters"]["wall_seconds"]
+        self.seconds = copy.deepcopy(state["counters"].get("seconds", {}))
         self.history = list(state["history"])
         self.batch_stats.load_state_dict(state.get("batch_stats", {"recent": []}))
         self.evaluations.load_state_dict(state)

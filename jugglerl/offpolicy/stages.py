@@ -24,6 +24,11 @@ then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
 | ``n_steps`` | RL stages: critic targets from this many steps of rewards (default 1) |
 | ``perturbed`` | name: env arguments (as ``eval.perturbed``); the stage's envs are split evenly
   among the nominal env and these, so it trains under what evaluations judge |
+| ``stop`` | end the stage early, at one of its evaluations (``StopRule``): ``throws``, once an
+  evaluation catches the ball and its score's throws (the nominal and perturbed episodes averaged,
+  ``jugglerl.batch.evaluations.score``) reach it; ``patience``, after that many evaluations in a
+  row without a better score than the stage's best. The later stages keep their lengths: they
+  start and end earlier by the frames saved (``stopped_early``) |
 
 Without ``algo.stages`` a run is one stage made of ``algo.loss`` and the exploration group.
 """
@@ -31,11 +36,13 @@ Without ``algo.stages`` a run is one stage made of ``algo.loss`` and the explora
 from __future__ import annotations
 
 import copy
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
+from jugglerl.batch.evaluations import score
 from jugglerl_envs.validation import check_number
 
 STAGE_KEYS = {
@@ -54,7 +61,40 @@ STAGE_KEYS = {
     "trains",
     "n_steps",
     "perturbed",
+    "stop",
 }
+
+
+@dataclass(frozen=True)
+class StopRule:
+    """When a stage ends at an evaluation before its ``until`` (the ``stop`` key)."""
+
+    throws: float | None = None
+    patience: int | None = None
+
+    def reason(self, records: list[dict]) -> str | None:
+        """Why the stage ends after the last of its evaluation ``records``, or ``None``."""
+        scores = [score(record) for record in records]
+        caught, throws = scores[-1][0] == 1, scores[-1][1]
+        if self.throws is not None and caught and throws >= self.throws:
+            return f"its evaluation scored {throws:.1f} throws (stop.throws={self.throws:g})"
+        best = max(range(len(scores)), key=lambda k: (scores[k], -k))  # the first best
+        if self.patience is not None and len(scores) - 1 - best >= self.patience:
+            return f"{self.patience} evaluations without a better one (stop.patience)"
+        return None
+
+    @classmethod
+    def from_spec(cls, spec, where: str) -> StopRule | None:
+        if spec is None:
+            return None
+        if not isinstance(spec, Mapping) or not spec or set(spec) - {"throws", "patience"}:
+            raise ValueError(f"{where}.stop: a mapping of throws and/or patience, not {spec}")
+        throws, patience = spec.get("throws"), spec.get("patience")
+        if throws is not None:
+            check_number(f"{where}.stop.throws", throws, 0, low_open=True)
+        if patience is not None:
+            check_number(f"{where}.stop.patience", patience, 1, integer=True)
+        return cls(throws=throws, patience=patience)
 
 
 @dataclass(frozen=True)
@@ -73,6 +113,7 @@ class Stage:
     warmup_frames: int
     #: env arguments the stage's envs are split among (``[{}]``: all nominal)
     variants: tuple[dict, ...] = ({},)
+    stop: StopRule | None = None
 
     def bc_weight_at(self, frames: int) -> float:
         """The cloning weight after ``frames`` frames of the run."""
@@ -137,6 +178,7 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
                 demo_fraction=fraction,
                 warmup_frames=int(spec.get("warmup_frames", 0)),
                 variants=_variants(spec.get("perturbed"), where),
+                stop=StopRule.from_spec(spec.get("stop"), where),
             )
         )
         start = int(end)
@@ -144,6 +186,21 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage.demonstrations for stage in stages
     ):
         raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
+    return stages
+
+
+def stopped_early(stages: list[Stage], stops: Mapping[int, int]) -> list[Stage]:
+    """``stages`` with each stage of ``stops`` (index: the frame it stopped at) ending there and
+    the stages after it shifted earlier by the frames it saved."""
+    stages = list(stages)
+    for index, frame in sorted(stops.items()):
+        saved = stages[index].end - frame
+        stages[index] = dataclasses.replace(stages[index], end=frame)
+        for later in range(index + 1, len(stages)):
+            stage = stages[later]
+            stages[later] = dataclasses.replace(
+                stage, start=stage.start - saved, end=stage.end - saved
+            )
     return stages
 
 

@@ -25,6 +25,7 @@ go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the 
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -47,7 +48,7 @@ from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.n_step import n_step_returns
-from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config
+from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config, stopped_early
 from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
@@ -78,7 +79,9 @@ class OffPolicyTraining(ActorTraining):
         torch.manual_seed(cfg.seed)
         start = initial_weights(cfg) if state is None and cfg.get("init_actor") else None
         norm = (state or start or {}).get("normalisation", {"loc": None, "scale": None})
-        self.stages = stages_from_config(cfg)
+        #: stage index -> the frame it stopped at, before its ``until`` (its ``stop`` rule)
+        self.stops: dict[int, int] = dict(state.get("stopped_early", {})) if state else {}
+        self.stages = stopped_early(stages_from_config(cfg), self.stops)
         first = self.stages[state.get("stage", 0)] if state else self.stages[0]
         self.env = make_env(
             cfg, cfg.collector.num_envs, norm["loc"], norm["scale"], list(first.variants)
@@ -94,6 +97,7 @@ class OffPolicyTraining(ActorTraining):
         self.frames = 0
         self.updates = 0
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
+        self.seconds: dict[str, dict[str, float]] = {}  # the same, by part and by stage
         self._session_start: float | None = None  # while run() trains
         self.history: list[dict] = []  # one record per collected batch
         self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
@@ -121,14 +125,16 @@ class OffPolicyTraining(ActorTraining):
         """Each stage from the current one, each collected to its end. A stage starts from the
         actor the one before would deploy (``current_actor``: with ``eval.target_actor`` its
         average or target), not from its last online weights."""
-        for stage in self.stages[self.stage.index :]:
+        for index in range(self.stage.index, len(self.stages)):
+            stage = self.stages[index]  # looked up each time: a stage that stops moves the rest
             if stage is not self.stage:
                 self.actor.load_state_dict(self.current_actor().state_dict())
                 if stage.variants != self.stage.variants:
                     self._perturb(stage.variants)
                 self._enter(stage)
             if self.frames < stage.end:
-                self._train_stage(logger, bar)
+                with self.timed(stage.name, "stages"):
+                    self._train_stage(logger, bar)
 
     def _perturb(self, variants: tuple[dict, ...]) -> None:
         """New envs split among ``variants`` (a stage's ``perturbed``), same normalisation."""
@@ -151,7 +157,9 @@ class OffPolicyTraining(ActorTraining):
         )
         try:
             algo = self.stage.cfg.algo
+            collecting = time.monotonic()
             for batch in collector:
+                self.spent("collect", collecting)  # the envs, the teacher, the acting actor
                 stats = self.batch_stats(batch)  # of the steps as played
                 batch = n_step_returns(batch, algo.n_steps, algo.get("gamma", 1.0))
                 self.buffer.extend(batch)
@@ -160,20 +168,51 @@ class OffPolicyTraining(ActorTraining):
                 self.frames += batch.numel()
                 self.noise.step(batch.numel())
                 record = {"frames": self.frames, "stage": self.stage.index}
-                with deferred_interrupt():  # a Ctrl-C inside a loss is not a clean stop
-                    record |= self._learn()
+                with deferred_interrupt(), self.timed("update"):  # a Ctrl-C inside a loss is
+                    record |= self._learn()  # not a clean stop
                 record |= stats
                 self.history.append(record)
                 logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
                 bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
                 bar.update(batch.numel())
+                stop = None
                 if crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
-                    record = self.evaluate(logger, self.cfg.eval.duration)
+                    with self.timed("evaluate"):
+                        record = self.evaluate(logger, self.cfg.eval.duration)
                     self.evaluations.keep_if_best(record, self.current_actor())
-                if crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
-                    self.save()
+                    stop = self._stop_reason()
+                if stop:
+                    self._stop_stage(stop, bar)
+                if stop or crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
+                    with self.timed("checkpoint"):
+                        self.save()
+                if stop:
+                    break
+                collecting = time.monotonic()
         finally:
             collector.shutdown(close_env=False)
+
+    def _stop_reason(self) -> str | None:
+        """Why the stage ends at the evaluation just made (its ``stop`` rule), or ``None``."""
+        if self.stage.stop is None:
+            return None
+        stage = self.stage
+        records = [r for r in self.evaluations.records if stage.start < r["frames"] <= stage.end]
+        return stage.stop.reason(records)
+
+    def _stop_stage(self, reason: str, bar: tqdm) -> None:
+        """End the stage here: the later stages start now and keep their lengths."""
+        saved = self.stage.end - self.frames
+        self.stops[self.stage.index] = self.frames
+        self.stages = stopped_early(stages_from_config(self.cfg), self.stops)
+        self.stage = self.stages[self.stage.index]
+        bar.total -= saved
+        bar.refresh()
+        tqdm.write(
+            f"note: stage {self.stage.name} ends at frame {self.frames}, {saved} frames early:"
+            f" {reason}",
+            file=sys.stderr,
+        )
 
     def _learn(self) -> dict:
         """The stage's ``optim.updates_per_batch`` updates once the buffer holds a batch; mean
@@ -205,6 +244,9 @@ class OffPolicyTraining(ActorTraining):
         demos = self.demonstrations.sample(fraction)
         return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
 
+    def frame_budget(self) -> int:
+        return self.stages[-1].end  # collector.total_frames less what stopped stages saved
+
     def label(self) -> str:
         return (
             f"{self.cfg.algo.name.upper()} ({self.cfg.actor.name} actor,"
@@ -225,6 +267,7 @@ class OffPolicyTraining(ActorTraining):
             "actor": self.actor.state_dict(),
             "update": self.update.state_dict(),
             "stage": self.stage.index,
+            "stopped_early": dict(self.stops),
             "exploration": self.noise.state_dict(),
         }
 

@@ -99,6 +99,7 @@ class PPOTraining(ActorTraining):
         self.frames = 0
         self.updates = 0
         self.wall_seconds = 0.0  # collecting, updating, evaluating; summed over resumed sessions
+        self.seconds: dict[str, dict[str, float]] = {}  # the same, by part
         self._session_start: float | None = None
         self.history: list[dict] = []
         self.recording_id: str | None = None
@@ -122,20 +123,23 @@ class PPOTraining(ActorTraining):
         frames = self.cfg.collector.frames_per_batch
         bar.update(frames)
         if crossed(self.frames, frames, self.cfg.eval.every_frames):
-            evaluation = self.evaluate(logger, self.cfg.eval.duration)
+            with self.timed("evaluate"):
+                evaluation = self.evaluate(logger, self.cfg.eval.duration)
             self.evaluations.keep_if_best(evaluation, self.current_actor())
         if crossed(self.frames, frames, self.cfg.checkpoint_every_frames):
-            self.save()
+            with self.timed("checkpoint"):
+                self.save()
 
     def _collect_and_learn(self) -> dict[str, float]:
         """One batch collected and learnt from; its record, added to the history."""
         started = time.monotonic()
         batch = self._collect()
         collected = time.monotonic()
+        self.spent("collect", started)
         self.frames += batch.numel()
         record = {"frames": self.frames, **self.batch_stats(batch), **reward_terms(batch)}
-        with deferred_interrupt():  # a Ctrl-C inside an update is not a clean stop
-            record |= self._learn(batch)
+        with deferred_interrupt(), self.timed("update"):  # a Ctrl-C inside an update is not a
+            record |= self._learn(batch)  # clean stop
         record["sigma"] = float(policy_sigma(self.agent).mean())
         record["frames_per_second"] = batch.numel() / (collected - started)
         record["update_seconds"] = time.monotonic() - collected
