@@ -43,7 +43,8 @@ before integrating), 2 ms older than the joint and ball states at the default ti
 ``throws`` (1 per throw over ``threshold`` in free flight, ``jugglerl_envs.events``: the paper's
 reward 1, the DPS objective), ``distance`` (``min(1, 0.05 m / cup-ball distance)``, reward 2),
 ``contacts`` (ball-arm contacts, reward 3), ``juggle`` (ours: throws plus a small centring term),
-``cradle`` (ours: ``juggle`` less a cost for a held ball rolled off the cone's axis).
+``cradle`` (ours: ``juggle`` less a cost for a held ball rolled off the cone's axis), ``rise``
+(ours: ``juggle`` plus the height a ball rises in free flight, up to the threshold).
 
 ## Start state
 Arm at ``home`` (pan, lift, elbow) with the wrist at ``wrist_angles``, at rest; the ball at rest

@@ -26,14 +26,11 @@ ARM_JOINTS = (
 ACTUATED_JOINTS = ARM_JOINTS[:3]
 #: With ``JuggleEnv(wrist_1_actuated=True)``, ``wrist_1_joint`` is a fourth, after them.
 ACTUATED_JOINTS_WITH_WRIST_1 = ARM_JOINTS[:4]
-WRIST_JOINTS = ARM_JOINTS[3:]
 
 BALL_BODY = "ball"
 BALL_GEOM = "ball"
 CUP_SITE = "cup"
-CUP_BODY = "cup"
 ARM_ROOT_BODY = "base"
-FLOOR_GEOM = "floor"
 BALL_CONTACT_SENSOR = "ball_contact"
 
 #: RGBA of ``ball_1``, ``ball_2``, ... (``ball`` is red in the XML).

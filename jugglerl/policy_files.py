@@ -1,5 +1,5 @@
-"""Policy files: YAML mappings with a ``kind`` (``command``, the default, ``feedback`` or
-``actor``: a network whose weights lie beside it), and the shipped ones.
+"""Policy files: YAML mappings with a ``kind`` (``command``, the default, ``feedback``,
+``throw_catch`` or ``actor``: a network whose weights lie beside it), and the shipped ones.
 
 Every shipped policy is one file in ``assets/policies/`` (installed as package data of
 ``jugglerl_envs.assets``), named by its stem: ``policy=expert`` is ``assets/policies/expert.yaml``.

@@ -29,10 +29,6 @@ CYCLE, TIME, LIFT, ELBOW = "cycle", "time", "lift", "elbow"
 COMPONENTS = (CYCLE, TIME, LIFT, ELBOW)
 
 
-def params_size(n_via_points: int) -> int:
-    return 1 + 3 * n_via_points
-
-
 def n_via_points(params: torch.Tensor) -> int:
     size = params.shape[-1]
     if size < 4 or (size - 1) % 3:

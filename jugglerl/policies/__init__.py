@@ -5,6 +5,7 @@ and forgets its episode on ``reset()``. The kinds:
 
 - ``command.CommandPolicy``: an open-loop via-point command (``jugglerl.commands``);
 - ``feedback.FeedbackPolicy``: a command locked to the ball by feedback (the closed loop);
+- ``throw_catch.ThrowCatchPolicy``: throws from rest and catches where the ball comes down;
 - ``actor.ActorPolicy``: a trained network (torch, imported only when one is loaded).
 
 ``loading.load_policy`` turns a ``policy=`` argument into one: a shipped name (the YAML files of
