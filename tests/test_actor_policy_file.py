@@ -24,6 +24,7 @@ from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv
 
 
+@pytest.mark.slow
 def test_lstm_juggler_juggles_by_name_with_no_feedback_policy_built(monkeypatch):
     built = []
     real_init = feedback.FeedbackPolicy.__init__
@@ -42,6 +43,7 @@ def test_lstm_juggler_juggles_by_name_with_no_feedback_policy_built(monkeypatch)
     assert episode.throws >= 39 and episode.max_cup_height <= 0.76
 
 
+@pytest.mark.slow
 def test_earth_lstm_juggles_at_real_gravity_as_a_network_alone(monkeypatch):
     built = []
     for kind in (feedback.FeedbackPolicy, throw_catch.ThrowCatchPolicy):

@@ -34,6 +34,7 @@ def clock_step(clock: BallClock, observation, time, first, memory: dict) -> Tens
     return data
 
 
+@pytest.mark.slow
 def test_the_clock_is_the_phase_of_a_teacher_that_resets_at_each_lock():
     env = JuggleEnv(duration=20.0)
     teacher = load_policy("closed_loop", env)
@@ -78,6 +79,7 @@ def test_the_clock_starts_at_each_episode_and_interpolates_the_crossing():
     assert float(restarted[LOCK][0]) == 0.0
 
 
+@pytest.mark.slow
 def test_in_the_batched_stack_each_env_keeps_its_own_clock_across_resets():
     cfg = train_config(
         "algo=ddpg",

@@ -134,6 +134,7 @@ def test_with_two_balls_the_cup_tracks_the_next_landing_only_while_it_holds_none
 @pytest.mark.parametrize(
     "name, kind", [("two_balls", FeedbackPolicy), ("two_balls_throw", ThrowCatchPolicy)]
 )
+@pytest.mark.slow
 def test_a_shipped_two_ball_juggler_keeps_both_balls_up_one_at_a_time(name, kind):
     env = JuggleEnv(balls=2, duration=30.0)
     policy = load_policy(name, env)

@@ -80,6 +80,7 @@ def play_alone(arguments: dict, policy: str, seed: int) -> dict:
     [("paper", "closed_loop", {}), ("earth", "earth_juggler", {}), ("paper", "two_balls", {})],
     ids=["paper", "earth", "two_balls"],
 )
+@pytest.mark.slow
 def test_each_env_of_a_mixed_batch_plays_as_the_env_alone_bit_for_bit(env, policy, extra):
     arguments = {**preset(env), "duration": 30.0, "reward": "cradle", **extra}
     if policy == "two_balls":
@@ -134,6 +135,7 @@ def test_an_ended_env_waits_or_restarts_on_the_next_step():
         assert info["time"][1] == pytest.approx(0.12)
 
 
+@pytest.mark.slow
 def test_a_saved_batch_continues_bit_for_bit():
     """Saved mid-episode after 777 steps, restored into a new batch: the next 500 steps are the
     same, with kicks, noise, tracked balls and autoresets along the way."""

@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "studies" / "centring_sweep.py"
 
 
@@ -13,6 +15,7 @@ def sweep(*arguments: str) -> subprocess.CompletedProcess:
     )
 
 
+@pytest.mark.slow
 def test_it_prints_a_row_per_pair_of_gains():
     result = sweep("--gains", "0:0,0.02:0.015", "--seeds", "1", "--duration", "6", "--workers", "1")
     assert result.returncode == 0, result.stderr

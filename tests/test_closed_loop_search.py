@@ -3,6 +3,7 @@
 import json
 from dataclasses import replace
 
+import pytest
 from cli import run_short_search, run_train, train_config
 from search_spaces import assert_wide_samples_are_valid_policies
 
@@ -38,6 +39,7 @@ def test_its_constraints_hold_over_many_wide_samples():
     assert_wide_samples_are_valid_policies(space, JuggleEnv(duration=2.0), FeedbackPolicy)
 
 
+@pytest.mark.slow
 def test_train_closed_loop_writes_a_feedback_policy(tmp_path):
     run_dir = tmp_path / "run"
     result = run_short_search("closed_loop", run_dir, "env.duration=4")

@@ -58,6 +58,7 @@ def _halve(items: list) -> list:
     return [item // 2 for item in items]
 
 
+@pytest.mark.slow
 def test_local_cluster_maps_chunks_in_order():
     cluster = open_cluster(None, workers=2)
     try:

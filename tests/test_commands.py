@@ -100,6 +100,7 @@ def test_shorten_hold_refuses_what_cannot_be_cut(index, cut, message):
         command.shorten_hold(index, cut)
 
 
+@pytest.mark.slow
 def test_expert_juggles_at_least_seven_throws_in_the_paper_preset():
     env = JuggleEnv()
     metrics = run_episode(env, CommandPolicy(load_command("expert")), seed=0)

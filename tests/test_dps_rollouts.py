@@ -22,6 +22,7 @@ def perturbed_experts(env: JuggleEnv, count: int) -> list[ViaPointCommand]:
     return sample_commands(load_command("expert"), count, constraints, seed=1)
 
 
+@pytest.mark.slow
 def test_batched_throws_and_drops_equal_the_envs():
     env = JuggleEnv(duration=20.0, reset_noise=0.01)
     commands = [load_command("expert"), *perturbed_experts(env, 9)]
@@ -63,6 +64,7 @@ def test_one_seed_per_command():
         rollouts.evaluate(commands, seeds=[0, 1])
 
 
+@pytest.mark.slow
 def test_bench_dps_prints_the_ratio_last():
     script = Path(__file__).resolve().parents[1] / "scripts" / "benchmarks" / "bench_dps.py"
     result = subprocess.run(
@@ -76,6 +78,7 @@ def test_bench_dps_prints_the_ratio_last():
     assert last.startswith("ratio ours / bare") and float(last.split()[-1]) > 0
 
 
+@pytest.mark.slow
 def test_hold_sweep_prints_a_row_per_cut():
     script = Path(__file__).resolve().parents[1] / "scripts" / "studies" / "hold_sweep.py"
     arguments = ["--duration", "6", "--seeds", "2", "--cuts", "0,0.3", "--lead-in", "0.5"]

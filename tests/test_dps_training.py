@@ -133,6 +133,7 @@ def run_training(cfg, run_dir: Path, state: dict | None = None) -> tuple[dict, S
 
 
 @pytest.mark.parametrize("update", ["greedy", "ereps", "cmaes"])
+@pytest.mark.slow
 def test_a_resumed_run_reproduces_the_uninterrupted_one(tmp_path, update):
     straight, _ = run_training(
         train_config(*SHORT, f"algo.update={update}", "algo.episodes=3", "seed=4"),
@@ -155,6 +156,7 @@ def test_a_resumed_run_reproduces_the_uninterrupted_one(tmp_path, update):
     assert torch.equal(training.collector.distribution.mean, final["mean"])
 
 
+@pytest.mark.slow
 def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     metrics, training = run_training(train_config(*SHORT, "algo.episodes=3"), tmp_path)
     history = metrics["history"]
@@ -187,6 +189,7 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
     assert times[-1] == pytest.approx(8.0)  # the best episode was recorded whole
 
 
+@pytest.mark.slow
 def test_a_run_deploying_the_mean_writes_it_and_checks_it(tmp_path):
     cfg = train_config(*SHORT, "algo.update=cmaes", "algo.deploy=mean", "algo.episodes=2")
     metrics, training = run_training(cfg, tmp_path)
@@ -199,6 +202,7 @@ def test_a_run_deploying_the_mean_writes_it_and_checks_it(tmp_path):
     assert metrics["noise_check"]["nominal_throws"] == nominal
 
 
+@pytest.mark.slow
 def test_train_script_runs_and_resumes_from_its_run_directory(tmp_path):
     first = run_train(*SHORT, "algo.episodes=1", f"hydra.run.dir={tmp_path}")
     assert first.returncode == 0, first.stderr
@@ -213,6 +217,7 @@ def test_train_script_runs_and_resumes_from_its_run_directory(tmp_path):
     assert (tmp_path / "train.1.rrd").is_file()  # the first recording is kept
 
 
+@pytest.mark.slow
 def test_ctrl_c_leaves_a_checkpoint_that_resumes(tmp_path):
     returncode, stderr = interrupt_train(tmp_path, *SHORT, "algo.episodes=1000")
     assert returncode != 0

@@ -33,6 +33,7 @@ def test_the_experts_elbow_flick_does_not_leave_the_cup_at_earth():
     assert max(throw.peak_speed) < 0.7 * math.pi  # the lagging servo never reaches the limit
 
 
+@pytest.mark.slow
 def test_a_short_search_prints_its_throw_and_bad_budgets_are_one_error_line():
     result = run_script("studies/earth_throw.py", "--restarts", "1", "--generations", "2")
     assert result.returncode == 0, result.stderr[-2000:]

@@ -3,6 +3,7 @@
 import json
 import subprocess
 
+import pytest
 import yaml
 from cli import run_script
 
@@ -14,6 +15,7 @@ def run_evaluate(*overrides: str) -> subprocess.CompletedProcess:
     return run_script("evaluate.py", *overrides)
 
 
+@pytest.mark.slow
 def test_evaluate_writes_metrics_json_in_the_run_dir(tmp_path):
     result = run_evaluate("policy=expert", "duration=10", "seed=2", f"hydra.run.dir={tmp_path}")
     assert result.returncode == 0, result.stderr
@@ -44,6 +46,7 @@ def test_evaluate_replays_a_command_file(tmp_path):
     )  # holding never throws
 
 
+@pytest.mark.slow
 def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
     rewards = ", ".join(REWARDS.names())
     for override, message in [
@@ -63,6 +66,7 @@ def test_bad_policy_or_env_value_gives_one_clear_line(tmp_path):
         assert "Traceback" not in result.stderr
 
 
+@pytest.mark.slow
 def test_several_seeds_add_the_other_starts_run_as_one_batch(tmp_path):
     result = run_evaluate(
         "policy=closed_loop",

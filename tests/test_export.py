@@ -45,6 +45,7 @@ def episode(policy: ActorPolicy, duration: float) -> tuple[np.ndarray, ...]:
 
 
 @pytest.mark.parametrize("name", ["lstm_centred", "ppo_juggler"])
+@pytest.mark.slow
 def test_the_docs_lines_run_the_exported_file_as_actor_policy_acts_over_30_s(tmp_path, name):
     policy = ActorPolicy.from_state(read_actor_weights(name))
     observations, times, actions = episode(policy, duration=30.0)

@@ -100,6 +100,7 @@ def test_steer_moves_the_cup_along_the_offset():
         assert 0.9 < np.linalg.norm(moved) / np.linalg.norm(offset) < 1.5
 
 
+@pytest.mark.slow
 def test_the_shipped_closed_loop_policy_loads_by_name_and_juggles():
     env = JuggleEnv()
     policy = load_policy("closed_loop", env)
@@ -107,6 +108,7 @@ def test_the_shipped_closed_loop_policy_loads_by_name_and_juggles():
     assert run_episode(env, policy, seed=0).throws >= 39  # the paper's best, open loop
 
 
+@pytest.mark.slow
 def test_closed_loop_keeps_juggling_under_kicks_that_break_the_open_loop_command():
     env = JuggleEnv(kick_rate=0.5, kick_speed=0.01)
     closed, open_loop = load_policy("closed_loop", env), load_policy("dps_best", env)
@@ -194,6 +196,7 @@ def test_gain_bounds_clip_samples_and_name_what_is_missing():
         gain_space({name: [0, 1] for name in PARAM_NAMES if name != "decay"})
 
 
+@pytest.mark.slow
 def test_rollouts_sum_the_throws_over_the_conditions():
     from omegaconf import OmegaConf
 
@@ -213,6 +216,7 @@ def test_rollouts_sum_the_throws_over_the_conditions():
     assert results.throws[0] > 0
 
 
+@pytest.mark.slow
 def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
     run_dir = tmp_path / "run"
     short = [
@@ -242,6 +246,7 @@ def test_train_feedback_writes_a_policy_that_evaluate_replays(tmp_path):
     assert "throws in 10 s" in evaluated.stdout  # (searches resume: tests/test_dps_training.py)
 
 
+@pytest.mark.slow
 def test_every_shipped_policy_keeps_its_throws_honest():
     """The cup's throat never rises above 0.76 m, so a counted throw rose 0.24 m in free flight;
     no two balls share the cup (they pass through each other: two would juggle as one); each
@@ -258,6 +263,7 @@ def test_every_shipped_policy_keeps_its_throws_honest():
         assert balls > 1 or metrics.throws >= 39, name
 
 
+@pytest.mark.slow
 def test_each_joint_search_kept_more_throws_under_action_noise():
     env = JuggleEnv(action_noise=0.003)
     names = ("closed_loop_gains", "closed_loop_tolerant", "closed_loop")

@@ -40,6 +40,7 @@ FAILED_WRITE = re.compile(r"^error: \S+: could not write (it|the recording|the v
         ),
     ],
 )
+@pytest.mark.slow
 def test_a_file_that_cannot_be_written_is_one_line_and_a_failure(
     tmp_path, script, overrides, limit, written
 ):

@@ -42,6 +42,7 @@ def critic_loss(update, batch) -> float:
 
 
 @pytest.mark.parametrize("algo", ["ddpg", "td3"])
+@pytest.mark.slow
 def test_an_update_lowers_the_critic_loss_on_a_fixed_batch(algo):
     cfg, _, update, data = transitions(f"algo={algo}", "optim.lr_critic=1e-4")
     batch = data.reshape(-1)
@@ -52,6 +53,7 @@ def test_an_update_lowers_the_critic_loss_on_a_fixed_batch(algo):
     assert critic_loss(update, batch) < before
 
 
+@pytest.mark.slow
 def test_ddpg_targets_move_by_tau():
     cfg, _, update, data = transitions()
     loss = update.loss
@@ -76,6 +78,7 @@ def test_ddpg_targets_move_by_tau():
         assert moved >= 4  # weights and biases of every layer (constant buffers stay)
 
 
+@pytest.mark.slow
 def test_td3_moves_the_actor_and_its_target_only_every_policy_delay_updates():
     cfg, actor, update, data = transitions("algo=td3", "algo.policy_delay=3")
     batch = data.reshape(-1)
@@ -103,6 +106,7 @@ def test_td3_moves_the_actor_and_its_target_only_every_policy_delay_updates():
     assert moved == [True, False, False, True, False, False]
 
 
+@pytest.mark.slow
 def test_td3_state_resumes_its_delay_count():
     _, _, update, data = transitions("algo=td3")
     update(data.reshape(-1))
@@ -111,6 +115,7 @@ def test_td3_state_resumes_its_delay_count():
     assert again.updates == 1 and "loss_actor" not in again(data.reshape(-1))
 
 
+@pytest.mark.slow
 def test_behaviour_cloning_brings_the_actor_to_the_teachers_actions():
     cfg, actor, update, data = transitions("algo=bc", "optim.lr_actor=1e-3")
     batch = data.reshape(-1)
@@ -123,6 +128,7 @@ def test_behaviour_cloning_brings_the_actor_to_the_teachers_actions():
     assert float(error.pow(2).mean()) == pytest.approx(last, rel=0.5)
 
 
+@pytest.mark.slow
 def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it():
     cfg, actor, update, data = transitions("algo=bc", "algo.bc_tau=0.25")
     batch = data.reshape(-1)
@@ -145,18 +151,21 @@ def test_behaviour_cloning_with_bc_tau_deploys_the_moving_average_and_resumes_it
         torch.testing.assert_close(value, deployed[key])
 
 
+@pytest.mark.slow
 def test_a_bc_tau_outside_zero_one_says_so():
     with pytest.raises(ValueError, match=r"algo.bc_tau=1.5 must be in \(0, 1\]"):
         transitions("algo=bc", "algo.bc_tau=1.5")
 
 
 @pytest.mark.parametrize("algo", ["ddpg", "td3"])
+@pytest.mark.slow
 def test_a_bc_weight_adds_the_cloning_term_to_the_rl_loss(algo):
     _, _, update, data = transitions(f"algo={algo}", "algo.bc_weight=2.5")
     losses = update(data.reshape(-1))
     assert losses["loss_bc"] > 0 and math.isfinite(losses["loss_actor"])
 
 
+@pytest.mark.slow
 def test_behaviour_cloning_without_a_teacher_says_so():
     _, _, update, data = transitions("algo=bc")
     with pytest.raises(ValueError, match="needs a teacher in the loop"):
@@ -164,6 +173,7 @@ def test_behaviour_cloning_without_a_teacher_says_so():
 
 
 @pytest.mark.parametrize("algo", ["ddpg", "td3", "bc"])
+@pytest.mark.slow
 def test_an_lstm_update_runs_on_sub_trajectories(algo):
     cfg, _, update, data = transitions("actor=lstm", f"algo={algo}")
     buffer = ReplayBuffer(1000, 64, slice_len=16)

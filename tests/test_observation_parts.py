@@ -23,6 +23,7 @@ def test_the_parts_are_the_observations_values_in_the_order_named():
     assert state.tolist() == expected
 
 
+@pytest.mark.slow
 def test_the_stack_and_a_deployed_actor_see_the_same_relative_state():
     cfg = train_config("algo=ddpg", "env.duration=2", "state.norm_frames=200", RELATIVE)
     torch.manual_seed(0)

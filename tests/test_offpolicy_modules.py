@@ -51,6 +51,7 @@ def test_time_features_are_elapsed_fraction_and_cycle_phase():
     torch.testing.assert_close(features, torch.tensor(expected), atol=1e-5, rtol=0)
 
 
+@pytest.mark.slow
 def test_timestamp_transform_appends_the_env_time_features():
     cfg, env, actor = stack()
     check_env_specs(env)
@@ -88,6 +89,7 @@ def test_the_stack_without_timestamp_keeps_18_observations():
     assert env.observation_spec["state"].shape[-1] == 18
 
 
+@pytest.mark.slow
 def test_normalisation_standardises_the_fitting_steps():
     _, env, _ = stack()
     norm = normalisation(env)
@@ -160,6 +162,7 @@ def test_expert_gaussian_anneals_towards_the_actor():
     torch.testing.assert_close(actions.std(0), torch.full((3,), 0.01), atol=1e-3, rtol=0)
 
 
+@pytest.mark.slow
 def test_exploration_modules_pass_the_action_through_when_deterministic():
     cfg, env, actor = stack()
     for name in ("gaussian", "ou"):
@@ -174,6 +177,7 @@ def test_exploration_modules_pass_the_action_through_when_deterministic():
             assert not torch.equal(policy(data.clone())["action"], plain)
 
 
+@pytest.mark.slow
 def test_ou_noise_is_correlated_in_time_and_its_scale_anneals():
     cfg, env, actor = stack("exploration=ou", "exploration.annealing_frames=100")
     noise = make_exploration(cfg.exploration, env.action_spec)
@@ -203,6 +207,7 @@ def test_unknown_exploration_names_the_valid_ones():
 
 
 # --- actors -------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_lstm_actor_gives_the_same_actions_step_by_step_and_in_recurrent_mode():
     _, env, actor = stack("actor=lstm", "env.duration=1")  # truncated every 50 steps
     with set_exploration_type(ExplorationType.DETERMINISTIC):
@@ -219,6 +224,7 @@ def test_lstm_actor_gives_the_same_actions_step_by_step_and_in_recurrent_mode():
     "actor_name, state",
     [("mlp", []), ("lstm", []), ("residual", []), ("lstm", ["state.ball_clock=true"])],
 )
+@pytest.mark.slow
 def test_actor_policy_acts_as_the_actor_does_in_the_env_stack(actor_name, state):
     cfg, env, actor = stack(f"actor={actor_name}", "collector.num_envs=1", *state)
     with set_exploration_type(ExplorationType.DETERMINISTIC), torch.no_grad():
@@ -239,6 +245,7 @@ def test_actor_policy_acts_as_the_actor_does_in_the_env_stack(actor_name, state)
 
 
 @pytest.mark.parametrize("actor_name", ["mlp", "lstm"])
+@pytest.mark.slow
 def test_actor_policy_acts_on_a_batch_as_the_env_stack_does(actor_name):
     cfg, env, actor = stack(
         f"actor={actor_name}", "collector.num_envs=4", "state.ball_clock=true", "env.duration=2"

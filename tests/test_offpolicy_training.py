@@ -57,6 +57,7 @@ def train(cfg, run_dir, state=None) -> tuple[dict, OffPolicyTraining]:
         ],
     ],
 )
+@pytest.mark.slow
 def test_a_smoke_run_writes_a_checkpoint_that_resumes(tmp_path, overrides):
     cfg = train_config(*TINY, *overrides)
     metrics, training = train(cfg, tmp_path)
@@ -79,6 +80,7 @@ def test_a_smoke_run_writes_a_checkpoint_that_resumes(tmp_path, overrides):
     assert list(times) == [384, 512, 512]
 
 
+@pytest.mark.slow
 def test_a_resumed_checkpoint_restores_networks_optimisers_exploration_and_clocks(
     tmp_path, monkeypatch
 ):
@@ -122,6 +124,7 @@ def test_updates_wait_while_the_buffer_holds_no_piece_as_long_as_a_slice(tmp_pat
     training.close()
 
 
+@pytest.mark.slow
 def test_the_checkpoint_ships_the_target_actor_unless_told_otherwise(tmp_path):
     for target in (True, False):
         cfg = train_config(*TINY, f"eval.target_actor={target}")
@@ -135,6 +138,7 @@ def test_the_checkpoint_ships_the_target_actor_unless_told_otherwise(tmp_path):
             assert not torch.equal(targets[key], online[key])
 
 
+@pytest.mark.slow
 def test_keep_best_ships_the_actor_of_the_best_evaluation(tmp_path):
     cfg = train_config(*TINY, "eval.keep_best=true", "eval.target_actor=false")
     training = OffPolicyTraining(cfg, tmp_path)
@@ -167,6 +171,7 @@ def test_keep_best_ships_the_actor_of_the_best_evaluation(tmp_path):
     plain.close()
 
 
+@pytest.mark.slow
 def test_train_script_trains_td3_resumes_and_evaluate_runs_its_run_directory(tmp_path):
     first = run_train(*TINY, "algo=td3", "actor=lstm", f"hydra.run.dir={tmp_path}")
     assert first.returncode == 0, first.stderr
@@ -205,6 +210,7 @@ def test_train_script_trains_td3_resumes_and_evaluate_runs_its_run_directory(tmp
     assert (tmp_path / ".hydra" / "overrides.yaml").read_text() == record
 
 
+@pytest.mark.slow
 def test_ctrl_c_twice_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
     """The second press, 20 ms after the first, lands while the run saves: it is ignored."""
     returncode, stderr = interrupt_train(
@@ -263,6 +269,7 @@ def test_ctrl_c_twice_leaves_a_ddpg_checkpoint_and_a_closed_recording(tmp_path):
         ("cluster=ray", "error: cluster=ray: an off-policy run trains in this process"),
     ],
 )
+@pytest.mark.slow
 def test_a_bad_override_gives_a_clear_message(tmp_path, override, message):
     result = run_train(*TINY, *override.split(), f"hydra.run.dir={tmp_path}")
     assert result.returncode != 0

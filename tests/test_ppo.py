@@ -77,6 +77,7 @@ def test_gae_bootstraps_through_the_time_limit_and_not_through_a_drop():
     assert torch.allclose(data["advantage"], expected)
 
 
+@pytest.mark.slow
 def test_a_resumed_run_repeats_the_uninterrupted_one(tmp_path):
     cfg = train_config(*SMOKE[:-1])
     straight = PPOTraining(cfg, tmp_path / "straight")
@@ -99,6 +100,7 @@ def test_a_resumed_run_repeats_the_uninterrupted_one(tmp_path):
     assert straight.history[-1]["frames"] == 1024 and straight.updates == 4 * 2 * 2
 
 
+@pytest.mark.slow
 def test_a_smoke_run_trains_resumes_and_ships_a_policy_that_evaluate_runs(tmp_path):
     run = tmp_path / "run"
     first = run_train(*SMOKE, "collector.total_frames=512", f"hydra.run.dir={run}")
@@ -131,6 +133,7 @@ def test_a_smoke_run_trains_resumes_and_ships_a_policy_that_evaluate_runs(tmp_pa
         ("collector.env=gym", "error: collector.env=gym: algo=ppo collects from a batch"),
     ],
 )
+@pytest.mark.slow
 def test_bad_settings_fail_in_one_line(override, message, tmp_path):
     result = run_train(*SMOKE, override, f"hydra.run.dir={tmp_path}")
     assert result.returncode == 1 and "Traceback" not in result.stderr

@@ -76,6 +76,7 @@ def test_a_run_interrupted_by_an_exception_leaves_a_readable_file(tmp_path, inte
     assert column(logger.path, "train/return", "Scalars:scalars", "step")[1].tolist() == [5.0]
 
 
+@pytest.mark.slow
 def test_a_crashed_script_without_a_with_block_still_closes_its_file(tmp_path):
     script = (
         "from jugglerl.recording.logger import RerunLogger\n"
@@ -251,6 +252,7 @@ def test_two_ball_throw_markers_sit_on_the_ball_thrown(tmp_path):
 
 
 # --- evaluate.py ---------------------------------------------------------------------------
+@pytest.mark.slow
 def test_evaluate_records_the_episode_it_runs(tmp_path):
     result = run_evaluate("policy=expert", "duration=12", f"hydra.run.dir={tmp_path}")
     assert result.returncode == 0, result.stderr
@@ -276,6 +278,7 @@ def plot_recording(path: Path, out: Path, seconds: float) -> subprocess.Complete
     return result
 
 
+@pytest.mark.slow
 def test_plot_recording_draws_the_ball_height_from_a_file(tmp_path):
     path, metrics, _ = record_expert(tmp_path, duration=8.0)
     out = tmp_path / "plot.png"
@@ -287,6 +290,7 @@ def test_plot_recording_draws_the_ball_height_from_a_file(tmp_path):
     assert red.sum() > 500
 
 
+@pytest.mark.slow
 def test_a_two_ball_recording_plots_each_balls_height_in_its_colour(tmp_path):
     path, _, _ = record_expert(tmp_path, duration=3.0, balls=2)
     first = column(path, "plots/ball_height", "Scalars:scalars", "sim_time")

@@ -29,6 +29,7 @@ def correction_of(actor) -> Correction:
     return next(m for m in actor.modules() if isinstance(m, Correction))
 
 
+@pytest.mark.slow
 def test_a_corrected_actor_starts_exactly_at_its_base():
     cfg = train_config(*CORRECTED)
     size = state_size(cfg.state)
@@ -89,6 +90,7 @@ def test_the_correction_stays_within_its_bound_and_reaches_it():
 @pytest.mark.parametrize(
     "loss", [["algo=ddpg"], ["algo=td3"], ["algo=td3", "algo.pessimism=1.0"]], ids=str
 )
+@pytest.mark.slow
 def test_updates_of_the_correction_never_move_the_base(loss):
     _, actor, update, data = transitions(
         *loss, *CORRECTED, "+optim.trains=correction", "optim.lr_actor=1e-2"
@@ -103,6 +105,7 @@ def test_updates_of_the_correction_never_move_the_base(loss):
     assert moved and moved <= owned
 
 
+@pytest.mark.slow
 def test_a_stage_training_the_correction_needs_one():
     with pytest.raises(ValueError, match="trains=correction needs an actor with actor.correction"):
         transitions("actor=lstm", "+optim.trains=correction")
@@ -141,6 +144,7 @@ def test_a_one_step_batch_only_gains_its_step_count():
 
 
 @pytest.mark.parametrize("algo", ["ddpg", "td3"])
+@pytest.mark.slow
 def test_the_critic_target_is_the_documented_one(algo):
     """DDPG: ``r + γ^m (1 - terminated) Q'(s', μ'(s'))``; TD3 with an ensemble of 3 critics and
     no smoothing noise: the same with the minimum over the 3 target critics."""
@@ -168,6 +172,7 @@ def test_the_critic_target_is_the_documented_one(algo):
     torch.testing.assert_close(info["target_value"], reward + discount * alive * values)
 
 
+@pytest.mark.slow
 def test_the_pessimistic_actor_objective_is_the_ensembles_mean_less_its_spread():
     _, actor, update, data = transitions("algo=td3", "critic.ensemble=3", "algo.pessimism=2.0")
     batch = data.reshape(-1)

@@ -89,6 +89,7 @@ def test_breaking_points_are_where_the_reference_first_falls_below_the_fraction(
     assert robustness.breaking_points(rows, "open", 0.4)[0]["magnitude"] == 0.1
 
 
+@pytest.mark.slow
 def test_the_script_writes_table_plot_json_and_recording(tmp_path):
     result = run_script(
         "robustness.py",

@@ -115,6 +115,7 @@ def full_disk(tmp_path):
     subprocess.run(["umount", "-l", str(folder)], check=False)
 
 
+@pytest.mark.slow
 def test_a_full_disk_ends_the_recording_and_the_checkpoint_with_one_line_each(full_disk):
     """Before the bounded flush, rerun's writer died at the first ENOSPC and the close waited
     forever; the subprocess's time limit turns such a hang into a failure."""

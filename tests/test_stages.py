@@ -35,6 +35,7 @@ STAGED = [
 ]
 
 
+@pytest.mark.slow
 def test_the_apprentice_stages_clone_then_dagger_then_rl():
     default = stages_from_config(train_config("algo=apprentice"))
     assert [(s.name, s.end) for s in default] == [("bc", 327680), ("dagger", 368640)]
@@ -153,6 +154,7 @@ def test_bad_stage_settings_are_named(override, message):
         )
 
 
+@pytest.mark.slow
 def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_stage(
     tmp_path, capsys
 ):
@@ -187,6 +189,7 @@ def test_a_staged_run_lets_the_teacher_act_then_the_student_and_resumes_in_any_s
     again.close()
 
 
+@pytest.mark.slow
 def test_the_default_pipeline_trains_only_the_correction_in_rl_and_resumes_inside_it(tmp_path):
     """BC, DAgger, then two batches of residual RL (no warm-up), killed after the first: the
     resume continues inside the rl stage, the clone under the correction never moves, the
@@ -218,6 +221,7 @@ def test_the_default_pipeline_trains_only_the_correction_in_rl_and_resumes_insid
     again.close()
 
 
+@pytest.mark.slow
 def test_a_resume_with_algo_loss_td3_runs_td3_in_the_rl_stage(tmp_path):
     """The RL stage's loss is ``${algo.loss}``: a resume's override reaches it (the checkpoint keeps
     the config's interpolations; with only the resolved config it stayed DDPG)."""
@@ -234,6 +238,7 @@ def test_a_resume_with_algo_loss_td3_runs_td3_in_the_rl_stage(tmp_path):
     again.close()
 
 
+@pytest.mark.slow
 def test_a_stage_starts_from_the_average_the_stage_before_deploys(tmp_path):
     cfg = train_config(*STAGED, "algo.bc_tau=0.5", "algo.stages.1.optim.updates_per_batch=0")
     cfg.collector.total_frames = 128  # the BC stage alone
@@ -262,6 +267,7 @@ def test_the_rl_stage_samples_its_demo_fraction_from_the_demonstrations(tmp_path
     training.close()
 
 
+@pytest.mark.slow
 def test_plot_learning_draws_a_runs_evaluations_and_names_a_missing_run(tmp_path):
     cfg = train_config(*STAGED, "eval.every_frames=128")
     train(cfg, tmp_path / "run")
@@ -280,6 +286,7 @@ def test_plot_learning_draws_a_runs_evaluations_and_names_a_missing_run(tmp_path
 TEACHERS = ("closed_loop", "closed_loop_gains")
 
 
+@pytest.mark.slow
 def test_the_phase_features_follow_the_teachers_cycle_and_a_resume_keeps_the_checkpoints(tmp_path):
     """``state.period: teacher`` (the apprentice default) is the teacher's command cycle, resolved
     when the run starts; a resume with another teacher keeps the number its checkpoint holds."""
@@ -321,6 +328,7 @@ EARTH_STAGED = [
 ]
 
 
+@pytest.mark.slow
 def test_the_earth_pipeline_clones_earth_juggler_with_three_arms_and_resumes_in_dagger(tmp_path):
     cfg = train_config(*EARTH_STAGED)
     bc, dagger = stages_from_config(cfg)
@@ -406,6 +414,7 @@ STOPPING = [
 ]
 
 
+@pytest.mark.slow
 def test_an_early_stop_ends_the_stage_between_batches_and_a_resume_goes_on_to_the_next(
     tmp_path, monkeypatch, capsys
 ):

@@ -30,6 +30,7 @@ def replayed_labels(policy, observations, times, starts) -> np.ndarray:
     return np.array(labels)
 
 
+@pytest.mark.slow
 def test_the_teacher_labels_what_the_student_visits_as_the_plain_policy_would():
     cfg = train_config(*SMALL)
     torch.manual_seed(0)
@@ -53,6 +54,7 @@ def test_the_teacher_labels_what_the_student_visits_as_the_plain_policy_would():
         np.testing.assert_array_equal(data[TEACHER_ACTION][index].numpy(), expected)
 
 
+@pytest.mark.slow
 def test_a_teacher_driving_the_batch_juggles_as_it_does_alone():
     cfg = train_config(
         "algo=ddpg", "env.duration=10", "state.norm_frames=200", "collector.num_envs=2"
@@ -82,6 +84,7 @@ class Still:
         return np.zeros(3, dtype=np.float32)
 
 
+@pytest.mark.slow
 def test_a_teachers_period_is_its_command_cycle_or_the_time_between_its_throws():
     paper = JuggleEnv()
     closed_loop = load_policy("closed_loop", paper)

@@ -43,6 +43,7 @@ def test_inverse_kinematics_puts_the_throat_where_asked():
     assert np.all(far >= ik.low) and np.all(far <= ik.high)
 
 
+@pytest.mark.slow
 def test_earth_juggler_by_name_juggles_at_real_gravity_within_the_speed_limit(monkeypatch):
     built = []
     monkeypatch.setattr(feedback.FeedbackPolicy, "__init__", lambda *a: built.append(a))
@@ -57,6 +58,7 @@ def test_earth_juggler_by_name_juggles_at_real_gravity_within_the_speed_limit(mo
     assert metrics.max_cup_height <= 0.76
 
 
+@pytest.mark.slow
 def test_with_a_weaker_arm_apex_lengthens_the_push_until_the_throws_reach_a_metre_again():
     data, source = read_policy_file("earth_juggler")
     held = throw_catch_from_dict(data, source)
@@ -155,6 +157,7 @@ def test_malformed_files_are_one_line_errors(change, message):
         throw_catch_from_dict({**data, **change}, "bad.yaml")
 
 
+@pytest.mark.slow
 def test_evaluate_reports_the_earth_juggler_cup_height_and_joint_speeds(tmp_path):
     result = run_script(
         "evaluate.py",
@@ -173,6 +176,7 @@ def test_evaluate_reports_the_earth_juggler_cup_height_and_joint_speeds(tmp_path
     assert last.startswith("error: policy earth_juggler throws with wrist_angles")
 
 
+@pytest.mark.slow
 def test_a_tracked_ball_with_two_millimetres_of_noise_still_counts_as_resting():
     """The rest test smooths the ball's differenced velocity: unsmoothed, 2 mm of tracking noise
     kept it above the rest speed most of the time (a searched juggler threw 9 times in 120 s)."""

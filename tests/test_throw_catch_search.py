@@ -35,6 +35,7 @@ def test_a_two_ball_start_adds_its_lead_and_still_to_theta_and_its_balls_to_the_
     assert load_policy(str(written), env).params == start  # it states balls: 2, as the env has
 
 
+@pytest.mark.slow
 def test_its_constraints_hold_over_many_wide_samples():
     space = ThrowCatchSpace(train_config("algo=throw_catch", "algo.workers=1"))
     env = env_preset("earth", duration=1.0)
@@ -52,6 +53,7 @@ def test_a_start_made_for_another_wrist_lock_is_one_error_line(tmp_path):
     assert last.startswith("error: policy earth_expert throws with wrist_angles")
 
 
+@pytest.mark.slow
 def test_train_throw_catch_writes_a_policy_that_evaluate_replays(tmp_path):
     run_dir = tmp_path / "run"
     result = run_short_search("throw_catch", run_dir, "env.duration=6")
@@ -70,6 +72,7 @@ def test_train_throw_catch_writes_a_policy_that_evaluate_replays(tmp_path):
     assert "throws in 6 s" in evaluated.stdout
 
 
+@pytest.mark.slow
 def test_episodes_beyond_the_limits_score_no_throws():
     metrics = EpisodeMetrics(
         throws=10,

@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
@@ -28,6 +30,7 @@ def test_a_drop_names_the_speed_of_the_dropped_balls_last_throw():
     assert dropped is not None and dropped in balls[:, 0].tolist()
 
 
+@pytest.mark.slow
 def test_it_prints_a_row_per_noise_level():
     result = subprocess.run(
         [

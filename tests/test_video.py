@@ -27,6 +27,7 @@ def decoded_frames(path) -> list[np.ndarray]:
         return [frame.to_ndarray(format="rgb24") for frame in container.decode(video=0)]
 
 
+@pytest.mark.slow
 def test_evaluate_writes_a_playable_real_time_mp4_and_the_same_episode(tmp_path):
     renderer_or_skip()
     plain, filmed = tmp_path / "plain", tmp_path / "filmed"
@@ -49,6 +50,7 @@ def test_evaluate_writes_a_playable_real_time_mp4_and_the_same_episode(tmp_path)
     assert metrics[0] == metrics[1]  # filming does not change the episode
 
 
+@pytest.mark.slow
 def test_a_webp_loops_and_has_a_frame_per_period(tmp_path):
     renderer_or_skip()
     env = JuggleEnv(duration=1.0)

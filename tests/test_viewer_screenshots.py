@@ -9,6 +9,7 @@ from pathlib import Path
 
 import imageio.v3 as iio
 import numpy as np
+import pytest
 from cli import run_script, run_train
 from viewer import opening_views, screenshot, shows, views_without_data
 
@@ -55,6 +56,7 @@ def check_opening(recording: Path, out: Path, blueprint, timeline: str) -> dict:
     return state
 
 
+@pytest.mark.slow
 def test_an_evaluated_episode_opens_on_sim_time_with_every_view_showing_data(tmp_path):
     result = run_script(
         "evaluate.py", "policy=closed_loop", "duration=20", f"hydra.run.dir={tmp_path}"
@@ -65,6 +67,7 @@ def test_an_evaluated_episode_opens_on_sim_time_with_every_view_showing_data(tmp
     )
 
 
+@pytest.mark.slow
 def test_a_training_run_opens_on_its_learning_curves_with_every_view_showing_data(tmp_path):
     result = run_train(*SHORT_DDPG, f"hydra.run.dir={tmp_path}")
     assert result.returncode == 0, result.stderr
