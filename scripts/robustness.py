@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config import make_juggle_env
-from jugglerl.config_types import check_override_types
+from jugglerl.config_types import check_override_types, exit_on_unknown_group_choice
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.reports import robustness
@@ -102,5 +102,6 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
+    exit_on_unknown_group_choice(Path(__file__).resolve().parents[1] / "configs")
     register_sweep_launcher()
     main()

@@ -28,7 +28,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from jugglerl.cluster import register_sweep_launcher
-from jugglerl.config_types import check_override_types
+from jugglerl.config_types import check_override_types, exit_on_unknown_group_choice
 from jugglerl.run_files import RunFileError
 from jugglerl.training import check_cluster, resume_state, train
 
@@ -49,5 +49,6 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
+    exit_on_unknown_group_choice(Path(__file__).resolve().parents[1] / "configs")
     register_sweep_launcher()
     main()

@@ -4,7 +4,7 @@ import pytest
 from cli import run_script
 from omegaconf import OmegaConf
 
-from jugglerl.config_types import type_mismatch
+from jugglerl.config_types import type_mismatch, unknown_group_choice
 
 
 @pytest.mark.parametrize(
@@ -49,3 +49,30 @@ def test_a_mistyped_override_is_one_error_line(tmp_path, script, override, messa
 )
 def test_values_are_compared_with_the_type_of_the_default(default, value, expected):
     assert type_mismatch(default, value) == expected
+
+
+@pytest.mark.parametrize(
+    ("script", "override", "message"),
+    [
+        ("train.py", "actor=gru", "error: actor=gru is not available; choose one of lstm, mlp,"),
+        ("train.py", "-m actor=mlp,gru", "error: actor=gru is not available; choose one of lstm"),
+        ("train.py", "+experiment=nope", "error: experiment=nope is not available; choose one"),
+        ("evaluate.py", "env=mars", "error: env=mars is not available; choose one of earth, paper"),
+        ("robustness.py", "cluster=slurm", "error: cluster=slurm is not available; choose one of"),
+        ("export_policy.py", "logger=x", "error: logger=x is not available; choose one of"),
+    ],
+)
+def test_a_group_choice_without_its_file_is_one_error_line(tmp_path, script, override, message):
+    result = run_script(script, *override.split(), f"hydra.run.dir={tmp_path}")
+    assert result.returncode == 1
+    assert result.stderr.strip() == result.stderr.strip().splitlines()[0]
+    assert result.stderr.startswith(message), result.stderr
+
+
+def test_group_choices_that_exist_or_are_not_groups_pass(tmp_path):
+    for group in ("actor", "algo"):
+        (tmp_path / group).mkdir()
+        (tmp_path / group / "mlp.yaml").write_text("{}")
+    lines = ["actor=mlp", "-m", "algo=mlp", "actor.hidden=[1]", "seed=3", "~actor", "hydra.x=1"]
+    assert unknown_group_choice(lines, tmp_path) is None
+    assert "actor=lstm" in unknown_group_choice(["actor=mlp,lstm"], tmp_path)

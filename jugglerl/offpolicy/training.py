@@ -7,11 +7,11 @@ loss a plug-in (``algo.loss``: ``ddpg``, ``td3``, ``bc``; ``jugglerl.offpolicy.l
 is the default) and a run directory, where it writes
 
 - ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
-  the stage, its loss's networks, targets and optimisers, the normalisation, the exploration
-  state, RNG states, counters, wall time, the throw-rate window, history, config and the
-  deployed actor (``policy``: what ``scripts/evaluate.py policy=<run dir>`` runs); not the
-  replay buffers nor the envs' running episodes (a resume refills the one and restarts the
-  other, and says so: ``resume_note``);
+  the stage (and the stages that stopped early), its loss's networks, targets and optimisers,
+  the normalisation, the exploration state, RNG states, counters, wall time (and where it went),
+  the throw-rate window, history, config and the deployed actor (``policy``: what
+  ``scripts/evaluate.py policy=<run dir>`` runs); not the replay buffers nor the envs' running
+  episodes (a resume refills the one and restarts the other, and says so: ``resume_note``);
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
 
