@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
+from importlib import resources
 from pathlib import Path
 
 from hydra import compose
@@ -22,6 +23,9 @@ from hydra.core.override_parser.overrides_parser import OverridesParser
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 _ABSENT = object()
+#: ``configs/``, installed as package data of ``jugglerl.configs``: where the scripts' Hydra
+#: configs and their groups are.
+CONFIG_DIR = Path(str(resources.files("jugglerl.configs")))
 #: Mappings whose entries are the user's to name (conditions, stages), checked where they are
 #: read; a ``+key`` anywhere else adds what nothing reads.
 OPEN_MAPPINGS = (
@@ -118,9 +122,9 @@ def unknown_group_choice(arguments: Sequence[str], config_dir: Path) -> str | No
     return None
 
 
-def exit_on_unknown_group_choice(config_dir: Path) -> None:
+def exit_on_unknown_group_choice() -> None:
     """End the script with one ``error:`` line when its command line chooses a config group
-    option that ``config_dir`` does not hold."""
-    problem = unknown_group_choice(sys.argv[1:], config_dir)
+    option that the project's configs (``CONFIG_DIR``) do not hold."""
+    problem = unknown_group_choice(sys.argv[1:], CONFIG_DIR)
     if problem:
         sys.exit(f"error: {problem}")

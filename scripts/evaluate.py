@@ -100,5 +100,5 @@ def more_starts(cfg: DictConfig, policy) -> list[EpisodeMetrics]:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice(Path(__file__).resolve().parents[1] / "configs")
+    exit_on_unknown_group_choice()
     main()

@@ -47,5 +47,5 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice(Path(__file__).resolve().parents[1] / "configs")
+    exit_on_unknown_group_choice()
     main()

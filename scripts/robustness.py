@@ -102,6 +102,6 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice(Path(__file__).resolve().parents[1] / "configs")
+    exit_on_unknown_group_choice()
     register_sweep_launcher()
     main()

@@ -66,8 +66,7 @@ class ActorTraining:
             raise
         self.wall_seconds = self.wall_time()
         self._session_start = None
-        with self.timed("final evaluation"):
-            final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
+        final = self.evaluate(logger, self.cfg.env.duration, self.deployed_actor(), final=True)
         if self.evaluations.best is not None:
             final["policy_frames"] = self.evaluations.best["frames"]
         self.save()
@@ -147,7 +146,8 @@ class ActorTraining:
     ) -> dict:
         """Deterministic episodes of ``actor`` (default: the current one) of ``duration`` s."""
         policy = self.actor_policy(actor if actor is not None else self.current_actor())
-        return self.evaluations.evaluate(policy, self.frames, logger, duration, final)
+        with self.timed("final evaluation" if final else "evaluate"):
+            return self.evaluations.evaluate(policy, self.frames, logger, duration, final)
 
     # --- checkpoints ----------------------------------------------------------------------
     def common_state(self) -> dict:
@@ -188,7 +188,8 @@ class ActorTraining:
         self.recording_id = state["recording_id"]
 
     def save(self) -> None:
-        save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
+        with self.timed("checkpoint"):
+            save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
 
     def close(self) -> None:
         self.env.close()

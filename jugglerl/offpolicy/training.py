@@ -177,15 +177,13 @@ class OffPolicyTraining(ActorTraining):
                 bar.update(batch.numel())
                 stop = None
                 if crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
-                    with self.timed("evaluate"):
-                        record = self.evaluate(logger, self.cfg.eval.duration)
+                    record = self.evaluate(logger, self.cfg.eval.duration)
                     self.evaluations.keep_if_best(record, self.current_actor())
                     stop = self._stop_reason()
                 if stop:
                     self._stop_stage(stop, bar)
                 if stop or crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
-                    with self.timed("checkpoint"):
-                        self.save()
+                    self.save()
                 if stop:
                     break
                 collecting = time.monotonic()
@@ -204,7 +202,7 @@ class OffPolicyTraining(ActorTraining):
         """End the stage here: the later stages start now and keep their lengths."""
         saved = self.stage.end - self.frames
         self.stops[self.stage.index] = self.frames
-        self.stages = stopped_early(stages_from_config(self.cfg), self.stops)
+        self.stages = stopped_early(self.stages, {self.stage.index: self.frames})
         self.stage = self.stages[self.stage.index]
         bar.total -= saved
         bar.refresh()

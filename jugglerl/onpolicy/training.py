@@ -123,12 +123,10 @@ class PPOTraining(ActorTraining):
         frames = self.cfg.collector.frames_per_batch
         bar.update(frames)
         if crossed(self.frames, frames, self.cfg.eval.every_frames):
-            with self.timed("evaluate"):
-                evaluation = self.evaluate(logger, self.cfg.eval.duration)
+            evaluation = self.evaluate(logger, self.cfg.eval.duration)
             self.evaluations.keep_if_best(evaluation, self.current_actor())
         if crossed(self.frames, frames, self.cfg.checkpoint_every_frames):
-            with self.timed("checkpoint"):
-                self.save()
+            self.save()
 
     def _collect_and_learn(self) -> dict[str, float]:
         """One batch collected and learnt from; its record, added to the history."""
