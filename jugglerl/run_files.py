@@ -22,6 +22,8 @@ FULL_DISK_BYTES = 1 << 20
 #: A run's results, written when it finishes: a run folder without it holds an unfinished run.
 METRICS = "metrics.json"
 PARTIAL = ".partial"
+#: The folder of an off-policy run's replay buffers (memory-mapped frames; a resume reopens them).
+BUFFERS = "buffers"
 
 
 class RunFileError(RuntimeError):

@@ -10,6 +10,7 @@ progress)``, ``position()``, ``summary(metrics)``, ``close()`` and ``recording_i
 from __future__ import annotations
 
 import importlib
+import shutil
 import sys
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
 from jugglerl.interrupts import stop_on_interrupt
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.run_files import METRICS, PARTIAL, write_atomically
+from jugglerl.run_files import BUFFERS, METRICS, PARTIAL, write_atomically
 
 TRAINERS = {
     "offpolicy": "jugglerl.offpolicy.training:OffPolicyTraining",
@@ -80,7 +81,8 @@ def check_cluster(cfg: DictConfig, sweeping: bool) -> None:
 def prepare_run_folder(run_dir: Path, resuming: bool, overwrite: bool) -> None:
     """Make ``run_dir`` ready for a run: ``ValueError`` if a new run would mix its files with
     another run's there (unless ``overwrite``: then that run's files go); stale partial
-    writes go; a resumed run's old ``metrics.json`` goes, as it is unfinished until it ends."""
+    writes go; a resumed run's old ``metrics.json`` goes, as it is unfinished until it ends; a
+    new run's folder loses the replay buffers of a run killed before its first checkpoint."""
     found = [name for name in (CHECKPOINT, METRICS) if (run_dir / name).exists()]
     if found and not resuming and not overwrite:
         raise ValueError(
@@ -92,6 +94,8 @@ def prepare_run_folder(run_dir: Path, resuming: bool, overwrite: bool) -> None:
         stale += [run_dir / CHECKPOINT, *run_dir.glob("*.rrd")]
     for path in stale:
         path.unlink(missing_ok=True)
+    if not resuming:
+        shutil.rmtree(run_dir / BUFFERS, ignore_errors=True)
 
 
 def save_hydra_record(run_dir: Path, cfg: DictConfig) -> None:
@@ -156,4 +160,13 @@ def _train(training, cfg: DictConfig, run_dir: Path, state: dict | None) -> None
         training.close()
     print(training.summary(metrics))
     files = sorted(p.name for p in run_dir.iterdir() if p.suffix in (".pt", ".yaml", ".json"))
-    print(f"-> {run_dir}: {', '.join(files)}, {logger.path.name}")
+    files.append(logger.path.name)
+    if (run_dir / BUFFERS).is_dir():
+        size = disk_megabytes(run_dir / BUFFERS)
+        files.append(f"{BUFFERS}/ ({size:.0f} MB, which a resume reads)")
+    print(f"-> {run_dir}: {', '.join(files)}")
+
+
+def disk_megabytes(folder: Path) -> float:
+    """The disk space the files under ``folder`` take (sparse files count what they hold)."""
+    return sum(path.stat().st_blocks * 512 for path in folder.rglob("*") if path.is_file()) / 1e6

@@ -253,27 +253,3 @@ def _variants(perturbed, where: str) -> tuple[dict, ...]:
         raise ValueError(f"{where}.perturbed must map names to env arguments")
     conditions = OmegaConf.to_container(OmegaConf.create(dict(perturbed)), resolve=True)
     return ({}, *conditions.values())
-
-
-def resume_note(stages: list[Stage], frames: int, buffer_size: int) -> str | None:
-    """What a run resumed at ``frames`` goes without (``None`` for a new run). Checkpoints hold
-    no replay buffers (too large to save at every checkpoint: docs/usage.md gives their size)
-    and no env mid-episode: the resumed run learns only from frames collected from here, its
-    envs start new episodes, and a later stage that draws ``demo_fraction`` of its batches from
-    demonstrations draws on those collected from here."""
-    if frames == 0:
-        return None
-    note = (
-        f"note: resumed without the replay buffer's {min(frames, buffer_size)} frames (checkpoints"
-        " hold none) and with the envs starting new episodes: the run goes on from here but does"
-        " not repeat an uninterrupted one"
-    )
-    gone = [stage.name for stage in stages if stage.demonstrations and stage.start < frames]
-    drawing = [stage.name for stage in stages if stage.demo_fraction and stage.end > frames]
-    if gone and drawing:
-        note += (
-            f"; the demonstrations of stage {', '.join(gone)} collected before frame {frames}"
-            f" are gone too, so stage {', '.join(drawing)} draws its demo_fraction only from"
-            " those collected from here on"
-        )
-    return note

@@ -50,6 +50,18 @@ class TeacherModule(TensorDictModuleBase):
             actions[index] = policy.act(observations[index], float(times[index]))
         return tensordict.set(TEACHER_ACTION, torch.from_numpy(actions))
 
+    def episode_state(self) -> list[Policy]:
+        """Each copy as it stands mid-episode (a checkpoint pickles them)."""
+        return copy.deepcopy(self.policies)
+
+    def load_episode_state(self, policies: list[Policy]) -> None:
+        """Continue the episodes of ``episode_state()``."""
+        if len(policies) != len(self.policies):
+            raise ValueError(
+                f"a checkpoint's teacher has {len(policies)} copies for {len(self.policies)} envs"
+            )
+        self.policies = copy.deepcopy(policies)
+
 
 def teacher_period(policy: Policy, env: gym.Env) -> float:
     """The teacher's cycle (s), for the networks' phase features (``state.period: teacher``).

@@ -9,9 +9,12 @@ is the default) and a run directory, where it writes
 - ``checkpoint.pt`` every ``checkpoint_every_frames``, at the end and on Ctrl-C (atomically):
   the stage (and the stages that stopped early), its loss's networks, targets and optimisers,
   the normalisation, the exploration state, RNG states, counters, wall time (and where it went),
-  the throw-rate window, history, config and the deployed actor (``policy``: what
-  ``scripts/evaluate.py policy=<run dir>`` runs); not the replay buffers nor the envs' running
-  episodes (a resume refills the one and restarts the other, and says so: ``resume_note``);
+  the throw-rate window, history, config, the deployed actor (``policy``: what
+  ``scripts/evaluate.py policy=<run dir>`` runs), the envs' running episodes and the teacher's
+  (``jugglerl.batch.collector``) and how far the replay buffers have filled: a resumed run
+  repeats an uninterrupted one, or says in a ``note:`` what it could not restore
+  (``jugglerl.offpolicy.resume``);
+- ``buffers/``: the replay buffers' frames, memory-mapped (``jugglerl.offpolicy.buffer``);
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
 
@@ -25,18 +28,17 @@ go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the 
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import torch
 from omegaconf import DictConfig
 from tensordict.nn import TensorDictSequential
-from torchrl.collectors import Collector
 from tqdm import tqdm
 
 from jugglerl.batch.actor_training import ActorTraining
 from jugglerl.batch.batch_stats import BatchStats
+from jugglerl.batch.collector import BatchCollector
 from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.batch.evaluations import Evaluations
 from jugglerl.config import make_juggle_env
@@ -48,11 +50,13 @@ from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.init_actor import initial_weights, load_base_weights
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.n_step import n_step_returns
-from jugglerl.offpolicy.stages import Stage, resume_note, stages_from_config, stopped_early
+from jugglerl.offpolicy.resume import resume_notes
+from jugglerl.offpolicy.stages import Stage, stages_from_config, stopped_early
 from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
+from jugglerl.run_files import BUFFERS
 from jugglerl.state.transforms import state_size
 from jugglerl.training import crossed
 
@@ -90,9 +94,13 @@ class OffPolicyTraining(ActorTraining):
         if start is not None:
             load_base_weights(self.actor, start["policy"], cfg.init_actor)
         self.recurrent = bool(recurrent_state(cfg.actor))
+        self.collector = BatchCollector(self.env)
         self.teacher = [] if teacher is None else [TeacherModule(teacher, cfg.collector.num_envs)]
-        self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
-        self.demonstrations = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent)
+        folder = self.run_dir / BUFFERS
+        self.buffer = ReplayBuffer.from_config(cfg.replay_buffer, self.recurrent, folder / "replay")
+        self.demonstrations = ReplayBuffer.from_config(
+            cfg.replay_buffer, self.recurrent, folder / "demonstrations"
+        )
         self.evaluations = Evaluations(cfg)
         self.frames = 0
         self.updates = 0
@@ -107,9 +115,6 @@ class OffPolicyTraining(ActorTraining):
         self._enter(first)
         if state is not None:
             self.load_state_dict(state)
-            note = resume_note(self.stages, self.frames, self.cfg.replay_buffer.size)
-            if note:
-                print(note, file=sys.stderr)
 
     def _enter(self, stage: Stage) -> None:
         """Build ``stage``'s loss (on the same actor) and exploration, and the acting policy."""
@@ -143,52 +148,43 @@ class OffPolicyTraining(ActorTraining):
         collect = self.cfg.collector
         loc, scale = norm.loc.clone(), norm.scale.clone()
         self.env = make_env(self.cfg, collect.num_envs, loc, scale, list(variants))
+        self.collector = BatchCollector(self.env)
 
     def _train_stage(self, logger: RerunLogger, bar: tqdm) -> None:
         collect = self.cfg.collector
         bar.set_description(f"{self.stage.name.upper()} {self.cfg.actor.name}")
-        self.env.set_seed(self.cfg.seed + self.frames)  # a resumed run meets new episodes
-        collector = Collector(
-            self.env,
-            self.policy,
-            frames_per_batch=collect.frames_per_batch,
-            total_frames=self.stage.end - self.frames,
-            init_random_frames=max(0, collect.init_random_frames - self.frames),
-        )
-        try:
-            algo = self.stage.cfg.algo
-            collecting = time.monotonic()
-            for batch in collector:
-                self.spent("collect", collecting)  # the envs, the teacher, the acting actor
-                stats = self.batch_stats(batch)  # of the steps as played
-                batch = n_step_returns(batch, algo.n_steps, algo.get("gamma", 1.0))
-                self.buffer.extend(batch)
-                if self.stage.demonstrations:
-                    self.demonstrations.extend(batch)
-                self.frames += batch.numel()
-                self.noise.step(batch.numel())
-                record = {"frames": self.frames, "stage": self.stage.index}
-                with deferred_interrupt(), self.timed("update"):  # a Ctrl-C inside a loss is
-                    record |= self._learn()  # not a clean stop
-                record |= stats
-                self.history.append(record)
-                logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
-                bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
-                bar.update(batch.numel())
-                stop = None
-                if crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
-                    record = self.evaluate(logger, self.cfg.eval.duration)
-                    self.evaluations.keep_if_best(record, self.current_actor())
-                    stop = self._stop_reason()
-                if stop:
-                    self._stop_stage(stop, bar)
-                if stop or crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
-                    self.save()
-                if stop:
-                    break
-                collecting = time.monotonic()
-        finally:
-            collector.shutdown(close_env=False)
+        if self.frames == self.stage.start or self.collector.carried is None:
+            self.collector.restart(self.cfg.seed + self.frames)  # new episodes
+        algo = self.stage.cfg.algo
+        steps = collect.frames_per_batch // collect.num_envs
+        while self.frames < self.stage.end:
+            with self.timed("collect"):  # the envs, the teacher, the acting actor
+                random = self.frames < collect.init_random_frames
+                batch = self.collector.collect(self.policy, steps, random)
+            stats = self.batch_stats(batch)  # of the steps as played
+            batch = n_step_returns(batch, algo.n_steps, algo.get("gamma", 1.0))
+            self.buffer.extend(batch)
+            if self.stage.demonstrations:
+                self.demonstrations.extend(batch)
+            self.frames += batch.numel()
+            self.noise.step(batch.numel())
+            record = {"frames": self.frames, "stage": self.stage.index}
+            with deferred_interrupt(), self.timed("update"):  # a Ctrl-C inside a loss is
+                record |= self._learn()  # not a clean stop
+            record |= stats
+            self.history.append(record)
+            logger.log_metrics({join(TRAIN, k): v for k, v in record.items()}, self.frames)
+            bar.set_postfix({k: f"{record[k]:.3g}" for k in POSTFIX if k in record})
+            bar.update(batch.numel())
+            stop = None
+            if crossed(self.frames, batch.numel(), self.cfg.eval.every_frames):
+                record = self.evaluate(logger, self.cfg.eval.duration)
+                self.evaluations.keep_if_best(record, self.current_actor())
+                stop = self._stop_reason()
+            if stop:
+                self._stop_stage(stop, bar)  # the stage's end is now: the loop ends
+            if stop or crossed(self.frames, batch.numel(), self.cfg.checkpoint_every_frames):
+                self.save()
 
     def _stop_reason(self) -> str | None:
         """Why the stage ends at the evaluation just made (its ``stop`` rule), or ``None``."""
@@ -267,10 +263,33 @@ class OffPolicyTraining(ActorTraining):
             "stage": self.stage.index,
             "stopped_early": dict(self.stops),
             "exploration": self.noise.state_dict(),
+            "collector": self.collector.state_dict(),
+            "teacher": [teacher.episode_state() for teacher in self.teacher],
+            "buffers": {
+                "replay": self.buffer.state_dict(),
+                "demonstrations": self.demonstrations.state_dict(),
+            },
         }
 
     def load_state_dict(self, state: dict) -> None:
+        """Back to a checkpoint: networks, optimisers, exploration, the envs' running episodes,
+        the teacher's and the replay buffers (reopened from the run folder); one ``note:`` line
+        for each thing it cannot restore."""
         self.actor.load_state_dict(state["actor"])
         self.update.load_state_dict(state["update"])
         self.noise.load_state_dict(state["exploration"])
         self.load_common_state(state)
+        self.collector.load_state_dict(state.get("collector", {}))
+        for teacher, episodes in zip(self.teacher, state.get("teacher", []), strict=False):
+            teacher.load_episode_state(episodes)
+        buffers = state.get("buffers", {})
+        restored = all(
+            buffer.load_state_dict(buffers[name])
+            for buffer, name in ((self.buffer, "replay"), (self.demonstrations, "demonstrations"))
+            if name in buffers
+        )
+        mid_stage = self.stage.start < self.frames < self.stage.end
+        episodes = bool(state.get("collector")) or not mid_stage  # a new stage starts new ones
+        restored = restored and bool(buffers)
+        for note in resume_notes(self.stages, self.frames, self.buffer, restored, episodes):
+            print(note, file=sys.stderr)

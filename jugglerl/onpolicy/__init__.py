@@ -4,7 +4,6 @@
   ``jugglerl.networks.actors``; the ``residual`` one plays a command, so that the untrained
   policy's mean is the command itself) and the critic ``V(state)``;
 - ``variants``: the perturbations each env of the training batch runs under;
-- ``rollout``: one batch of steps from every env, the carried state between batches;
 - ``training.PPOTraining``: the loop behind ``scripts/train.py algo=ppo``: collect, advantages
   (GAE), clipped PPO updates (TorchRL's ``ClipPPOLoss``), log, evaluate, checkpoint.
 """

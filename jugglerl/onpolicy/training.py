@@ -6,10 +6,11 @@ The envs are one ``JuggleBatch`` (``collector.env=batch``) of ``collector.num_en
 under its own perturbation (``variants``), under the state transforms of ``jugglerl.state``; the
 observation normalisation is fitted on the untrained policy's mean, i.e. the reference's own
 roll-outs, and kept for the run. Each batch is ``collector.frames_per_batch / num_envs`` steps of
-every env; the last step's state is carried to the next batch, so episodes run across batches
-(a drop is ``terminated``, the time limit ``truncated``: GAE bootstraps through it). The updates
-are TorchRL's ``GAE`` (once per batch) and ``ClipPPOLoss`` (advantages normalised, an L2
-critic) over ``algo.epochs`` passes of minibatches of ``algo.minibatch_size``.
+every env; the last step's state is carried to the next batch (``jugglerl.batch.collector``), so
+episodes run across batches (a drop is ``terminated``, the time limit ``truncated``: GAE
+bootstraps through it). The updates are TorchRL's ``GAE`` (once per batch) and ``ClipPPOLoss``
+(advantages normalised, an L2 critic) over ``algo.epochs`` passes of minibatches of
+``algo.minibatch_size``.
 
 It writes to the run directory
 
@@ -33,13 +34,13 @@ import numpy as np
 import torch
 from omegaconf import DictConfig
 from tensordict import TensorDict
-from torchrl.envs.utils import ExplorationType, set_exploration_type
 from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from tqdm import tqdm
 
 from jugglerl.batch.actor_training import ActorTraining
 from jugglerl.batch.batch_stats import BatchStats
+from jugglerl.batch.collector import BatchCollector
 from jugglerl.batch.env_stack import fit_normalisation_on, make_env
 from jugglerl.batch.evaluations import Evaluations
 from jugglerl.interrupts import deferred_interrupt
@@ -78,7 +79,8 @@ class PPOTraining(ActorTraining):
         )
         variants = training_variants(cfg, collect.num_envs)
         self.env = make_env(cfg, collect.num_envs, norm["loc"], norm["scale"], variants)
-        self.env.set_seed(cfg.seed)
+        self.collector = BatchCollector(self.env)
+        self.collector.restart(cfg.seed)
         self.agent = make_agent(cfg, state_size(cfg.state))
         self.advantage = GAE(
             gamma=algo.gamma, lmbda=algo.lmbda, value_network=self.agent.critic, average_gae=False
@@ -103,7 +105,6 @@ class PPOTraining(ActorTraining):
         self._session_start: float | None = None
         self.history: list[dict] = []
         self.recording_id: str | None = None
-        self.carried: TensorDict | None = None  # every env's state after the last batch
         if state is not None:
             self.load_state_dict(state)
         else:
@@ -149,15 +150,7 @@ class PPOTraining(ActorTraining):
         tensordict ``[num_envs, steps]``."""
         steps = self.cfg.collector.frames_per_batch // self.cfg.collector.num_envs
         torch.set_num_threads(1)  # the physics has the cores
-        carried = self.carried if self.carried is not None else self.env.reset()
-        trajectory = []
-        with torch.no_grad(), set_exploration_type(ExplorationType.RANDOM):
-            for _ in range(steps):
-                carried = self.agent.policy(carried)
-                step, carried = self.env.step_and_maybe_reset(carried)
-                trajectory.append(step)
-        self.carried = carried
-        return torch.stack(trajectory, dim=1)
+        return self.collector.collect(self.agent.policy, steps)
 
     def _learn(self, batch: TensorDict) -> dict[str, float]:
         """``algo.epochs`` passes of clipped PPO updates over ``batch``; mean losses."""
@@ -204,16 +197,14 @@ class PPOTraining(ActorTraining):
                 "critic": self.agent.critic.state_dict(),
             },
             "optimizer": self.optimizer.state_dict(),
-            "envs": self.env.base_env.batch.state_dict(),
-            "carried": self.carried,
+            "collector": self.collector.state_dict(),
         }
 
     def load_state_dict(self, state: dict) -> None:
         self.agent.policy.load_state_dict(state["agent"]["policy"])
         self.agent.critic.load_state_dict(state["agent"]["critic"])
         self.optimizer.load_state_dict(state["optimizer"])
-        self.env.base_env.batch.load_state_dict(state["envs"])
-        self.carried = state["carried"]
+        self.collector.load_state_dict(state["collector"])
         self.load_common_state(state)
 
 
