@@ -1,13 +1,15 @@
 """Command-line overrides checked against the types of the defaults they replace, and group
-choices against the files of their group.
+choices and keys against the configs.
 
 Hydra takes ``optim.lr_actor=abc`` as the string ``"abc"`` (the configs have no schema), and the
 mistake surfaces much later as a traceback deep in the training code. ``check_override_types``,
 called first thing in a script's ``main``, turns it into one line naming the key and the type
 its default has: ``optim.lr_actor=abc: expected a number (float)``. A choice of a config group
-that has no file (``actor=gru``) fails before ``main``, in Hydra's composition, with 9-15 lines;
-``exit_on_unknown_group_choice``, called before Hydra starts, says it in one, as the registries
-do: ``error: actor=gru is not available; choose one of lstm, mlp, residual``.
+that has no file (``actor=gru``) and a key the config does not have (``optim.lr=1``) fail before
+``main``, in Hydra's composition, with 6-15 lines; ``exit_on_bad_command_line``, called before
+Hydra starts, says each in one, as the registries do: ``error: actor=gru is not available;
+choose one of lstm, mlp, residual``, ``error: optim.lr=1: the config has no optim.lr; optim has
+lr_actor, lr_critic, …``.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
 
-from hydra import compose
+from hydra import compose, initialize_config_dir
 from hydra.core.hydra_config import HydraConfig
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from omegaconf import DictConfig, ListConfig, OmegaConf
@@ -122,9 +124,62 @@ def unknown_group_choice(arguments: Sequence[str], config_dir: Path) -> str | No
     return None
 
 
-def exit_on_unknown_group_choice() -> None:
+def unknown_key(arguments: Sequence[str], config_name: str, config_dir: Path) -> str | None:
+    """What is wrong with the first plain ``key=value`` of ``arguments`` (a command line) whose
+    key the config ``config_name`` does not have once the command line's group choices are
+    composed (Hydra refuses those), naming the keys its nearest parent has; or ``None``. Adds
+    (``+key``), deletions and Hydra's own keys are left to the other checks and to Hydra."""
+    try:
+        parsed = OverridesParser.create().parse_overrides(
+            [a for a in arguments if not a.startswith("-")]
+        )
+    except Exception:  # a malformed line: Hydra's parser says what is wrong with it
+        return None
+    groups, plain = [], []
+    for override in parsed:
+        key = override.key_or_group
+        if key.startswith("hydra") or override.is_delete() or override.is_force_add():
+            continue
+        if (config_dir / key).is_dir():  # a group choice; a sweep's first choice stands for all
+            first = str(override.input_line).partition("=")[2].split(",")[0]
+            groups.append(f"{'+' if override.is_add() else ''}{key}={first}")
+        elif not override.is_add():
+            plain.append(override)
+    if not plain:
+        return None
+    with initialize_config_dir(str(config_dir), version_base="1.3"):
+        try:
+            defaults = compose(config_name, overrides=groups)
+        except Exception:  # a group's own problem: Hydra reports it
+            return None
+    for override in plain:
+        key = override.key_or_group
+        if OmegaConf.select(defaults, key, default=_ABSENT) is not _ABSENT:
+            continue
+        parent_key = key
+        parent = _ABSENT
+        while parent_key and parent is _ABSENT:
+            parent_key = parent_key.rpartition(".")[0]
+            parent = (
+                OmegaConf.select(defaults, parent_key, default=_ABSENT) if parent_key else defaults
+            )
+        line = override.input_line
+        problem = f"{line}: the config has no {key}"
+        if isinstance(parent, DictConfig):
+            problem += f"; {parent_key or 'the config'} has {', '.join(sorted(parent))}"
+        if any(argument.startswith("resume=") for argument in arguments):
+            problem += " (a resume's overrides are checked against the config this command line"
+            problem += " composes: repeat the run's group choices, e.g. algo=dps)"
+        return problem
+    return None
+
+
+def exit_on_bad_command_line(config_name: str) -> None:
     """End the script with one ``error:`` line when its command line chooses a config group
-    option that the project's configs (``CONFIG_DIR``) do not hold."""
-    problem = unknown_group_choice(sys.argv[1:], CONFIG_DIR)
+    option that the project's configs (``CONFIG_DIR``) do not hold, or sets a key that its
+    config ``config_name`` does not have."""
+    problem = unknown_group_choice(sys.argv[1:], CONFIG_DIR) or unknown_key(
+        sys.argv[1:], config_name, CONFIG_DIR
+    )
     if problem:
         sys.exit(f"error: {problem}")

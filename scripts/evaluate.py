@@ -21,7 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episodes
 from jugglerl.config import make_juggle_env
-from jugglerl.config_types import check_override_types, exit_on_unknown_group_choice
+from jugglerl.config_types import check_override_types, exit_on_bad_command_line
 from jugglerl.evaluation import EpisodeMetrics, summarise_episodes
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.blueprint import episode_blueprint
@@ -100,5 +100,5 @@ def more_starts(cfg: DictConfig, policy) -> list[EpisodeMetrics]:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice()
+    exit_on_bad_command_line("evaluate")
     main()

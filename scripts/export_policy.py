@@ -17,7 +17,7 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from jugglerl.config_types import exit_on_unknown_group_choice
+from jugglerl.config_types import exit_on_bad_command_line
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.actor_file import read_actor_weights
 from jugglerl.policies.export import export
@@ -47,5 +47,5 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice()
+    exit_on_bad_command_line("export")
     main()

@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from jugglerl.cluster import register_sweep_launcher
 from jugglerl.config import make_juggle_env
-from jugglerl.config_types import check_override_types, exit_on_unknown_group_choice
+from jugglerl.config_types import check_override_types, exit_on_bad_command_line
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.reports import robustness
@@ -102,6 +102,6 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice()
+    exit_on_bad_command_line("robustness")
     register_sweep_launcher()
     main()

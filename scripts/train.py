@@ -28,7 +28,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from jugglerl.cluster import register_sweep_launcher
-from jugglerl.config_types import check_override_types, exit_on_unknown_group_choice
+from jugglerl.config_types import check_override_types, exit_on_bad_command_line
 from jugglerl.run_files import RunFileError
 from jugglerl.training import check_cluster, resume_state, train
 
@@ -49,6 +49,6 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    exit_on_unknown_group_choice()
+    exit_on_bad_command_line("train")
     register_sweep_launcher()
     main()

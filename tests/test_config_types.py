@@ -1,10 +1,11 @@
-"""A command-line override of the wrong type ends the scripts with one line naming key and type."""
+"""A command-line override of the wrong type, a group choice without its file and a key the config
+does not have end the scripts with one line naming what to change."""
 
 import pytest
 from cli import run_script
 from omegaconf import OmegaConf
 
-from jugglerl.config_types import type_mismatch, unknown_group_choice
+from jugglerl.config_types import CONFIG_DIR, type_mismatch, unknown_group_choice, unknown_key
 
 
 @pytest.mark.parametrize(
@@ -60,6 +61,12 @@ def test_values_are_compared_with_the_type_of_the_default(default, value, expect
         ("evaluate.py", "env=mars", "error: env=mars is not available; choose one of earth, paper"),
         ("robustness.py", "cluster=slurm", "error: cluster=slurm is not available; choose one of"),
         ("export_policy.py", "logger=x", "error: logger=x is not available; choose one of"),
+        (
+            "train.py",
+            "optim.lr_actorr=1",
+            "error: optim.lr_actorr=1: the config has no optim.lr_actorr; optim has lr_actor,",
+        ),
+        ("evaluate.py", "durationn=2", "error: durationn=2: the config has no durationn; the"),
     ],
 )
 def test_a_group_choice_without_its_file_is_one_error_line(tmp_path, script, override, message):
@@ -76,3 +83,20 @@ def test_group_choices_that_exist_or_are_not_groups_pass(tmp_path):
     lines = ["actor=mlp", "-m", "algo=mlp", "actor.hidden=[1]", "seed=3", "~actor", "hydra.x=1"]
     assert unknown_group_choice(lines, tmp_path) is None
     assert "actor=lstm" in unknown_group_choice(["actor=mlp,lstm"], tmp_path)
+
+
+def test_keys_are_looked_up_in_the_config_the_group_choices_compose():
+    def problem(*arguments):
+        return unknown_key(arguments, "train", CONFIG_DIR)
+
+    assert problem("algo=dps", "algo.episodes=4", "-m", "seed=0,1", "+eval.perturbed.x={}") is None
+    assert problem("hydra.run.dir=x", "~init_actor", "algo.stages.0.until=4") is None
+    assert problem("algo.episodes=4").startswith(
+        "algo.episodes=4: the config has no algo.episodes; algo has bc_tau,"
+    )  # the default algo (apprentice) has none
+    assert (
+        problem("algo.stages.5.until=4")
+        == "algo.stages.5.until=4: the config has no algo.stages.5.until"
+    )
+    assert "the config has no foo.x; the config has actor, algo," in problem("foo.x=1")
+    assert "repeat the run's group choices, e.g. algo=dps" in problem("resume=R", "algo.episodes=4")
