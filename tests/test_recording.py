@@ -14,14 +14,15 @@ import rerun_cli
 from rerun.chunk import RrdReader
 from test_evaluate_script import run_evaluate
 
+from jugglerl.batch.episodes import batch_policy, run_episodes
 from jugglerl.commands import load_command
 from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.loading import load_policy
-from jugglerl.recording.episode import EpisodeRecorder
+from jugglerl.recording.episode import BatchEnvRecorder, EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column, entities, timelines
-from jugglerl_envs import JuggleEnv
+from jugglerl_envs import JuggleBatch, JuggleEnv
 from jugglerl_envs.events import count_throws
 
 RERUN_CLI = Path(sys.executable).parent / "rerun"
@@ -206,6 +207,29 @@ def test_logged_ball_positions_match_the_simulated_trajectory(tmp_path):
     assert len(times) == len(trajectory) + 1  # + the last state, which no policy sees
     assert np.allclose(times[:-1], trajectory[:, 0], atol=1e-9)
     assert np.allclose(positions[:-1], trajectory[:, 1:], atol=1e-6)  # float32
+
+
+def test_an_env_of_a_batch_records_the_same_episode_as_a_lone_env(tmp_path):
+    """Evaluations record their first episode while the batch runs all of them."""
+    expert = load_command("expert")
+    lone, _, _ = record_expert(tmp_path / "lone", duration=6.0)
+    batch = JuggleBatch(3, autoreset=False, duration=6.0, reset_noise=[0.0, 0.01, 0.01])
+    with RerunLogger("episode", tmp_path / "batch") as logger:
+        recorder = BatchEnvRecorder(batch, 0, logger.recording, "")
+        policies = batch_policy(CommandPolicy(expert), 3)
+        (metrics, *_) = run_episodes(batch, policies, [0, 1, 2], recorder)
+    verify(logger.path)
+    for entity, component in (
+        ("world/ball", "Transform3D:translation"),
+        ("plots/ball_height", "Scalars:scalars"),
+        ("plots/throws", "Scalars:scalars"),
+    ):
+        times, values = column(lone, entity, component, "sim_time")
+        batch_times, batch_values = column(logger.path, entity, component, "sim_time")
+        assert np.array_equal(batch_times, times) and np.array_equal(batch_values, values)
+    assert len(column(logger.path, "plots/throws", "Scalars:scalars", "sim_time")[0]) == (
+        metrics.throws
+    )
 
 
 def test_an_abandoned_episode_keeps_what_was_recorded(tmp_path, hold):

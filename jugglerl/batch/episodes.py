@@ -13,7 +13,7 @@ the same composition.
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Protocol
 
 import numpy as np
@@ -68,17 +68,26 @@ def per_env_arguments(envs: Sequence[dict]) -> dict[str, list]:
 
 
 def run_episodes(
-    batch: JuggleBatch, policy: BatchPolicy, seeds: Sequence[int]
+    batch: JuggleBatch,
+    policy: BatchPolicy,
+    seeds: Sequence[int],
+    on_step: Callable[[np.ndarray], None] | None = None,
 ) -> list[EpisodeMetrics]:
     """One episode per env of ``batch`` (made with ``autoreset=False``), env ``i`` reset with
-    ``seeds[i]``; their metrics in env order."""
+    ``seeds[i]``; their metrics in env order. ``on_step(moved)``, if given, runs after the reset
+    and after each step, ``moved`` saying which envs it moved (a recorder follows an env with
+    it: ``jugglerl.recording.episode.BatchEnvRecorder``)."""
     observations, info = batch.reset(seed=list(seeds))
     policy.reset()
     running = np.ones(batch.num_envs, dtype=bool)
     metrics: list[EpisodeMetrics | None] = [None] * batch.num_envs
+    if on_step is not None:
+        on_step(running.copy())
     while running.any():
         actions = policy.act(observations, info["time"], running)
         observations, _, terminated, truncated, info = batch.step(actions)
+        if on_step is not None:
+            on_step(running.copy())
         for env in np.flatnonzero(running & (terminated | truncated)).tolist():
             metrics[env] = episode_metrics(batch.env_info(env), terminated[env], seeds[env])
             running[env] = False

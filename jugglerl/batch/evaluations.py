@@ -6,8 +6,8 @@ every evaluation, ``final`` at the run's last), and with ``eval.perturbed`` (nam
 ``eval.perturbed_seeds`` episodes of ``eval.perturbed_duration`` s (or the condition's own
 ``duration``) under each of those conditions, from env seeds ``eval.perturbed_first_seed`` on: away
 from the seeds ``scripts/robustness.py`` measures on, so that a run is not selected on its
-benchmark. All the episodes but the recorded one run as one ``JuggleBatch``, the actor acting on
-every env in one forward pass per step. It keeps every evaluation's record, and with
+benchmark. All the episodes, the recorded one too, run as one ``JuggleBatch``, the actor acting
+on every env in one forward pass per step. It keeps every evaluation's record, and with
 ``eval.keep_best`` the weights of the best one, which the run then deploys instead of its last
 actor. An evaluation's score is the nominal episodes' catch rate (an actor must catch the ball from
 the standard start), then throws, then time up, each averaged over the nominal episodes and the
@@ -29,7 +29,7 @@ from jugglerl.config import make_juggle_env
 from jugglerl.evaluation import EpisodeMetrics, summarise_episodes
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.recording.blueprint import offpolicy_curves, training_blueprint
-from jugglerl.recording.episode import record_episode
+from jugglerl.recording.episode import BatchEnvRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import EVAL, join
 from jugglerl_envs import JuggleBatch
@@ -63,21 +63,18 @@ class Evaluations:
         returns their record. ``final``: the run's last evaluation, recorded with
         ``eval.record=final`` too."""
         check = self.cfg.eval
-        seeds = list(range(check.seeds))
-        recorded = []
-        if check.record is True or (final and check.record == "final"):  # into the recording
-            root = join(EVAL, f"{frames:08d}")
-            env = make_juggle_env(self.cfg.env, duration=duration)
-            stream, fps = logger.recording, self.cfg.logger.scene_fps
-            recorded.append(record_episode(env, policy, stream, root, seeds[0], fps))
-            logger.send_blueprint(training_blueprint(self.curves, root, self.cfg.env.threshold))
-        plan = [(None, {"duration": duration}, seed) for seed in seeds[len(recorded) :]]
+        plan = [(None, {"duration": duration}, seed) for seed in range(check.seeds)]
         first = check.perturbed_first_seed
         for name, overrides in self.conditions.items():
             overrides = {"duration": check.perturbed_duration, **overrides}
             plan += [(name, overrides, first + k) for k in range(check.perturbed_seeds)]
-        episodes = self._episodes(policy, plan)
-        nominal = recorded + [m for (name, _, _), m in zip(plan, episodes, strict=True) if not name]
+        root = None
+        if check.record is True or (final and check.record == "final"):  # into the recording
+            root = join(EVAL, f"{frames:08d}")
+        episodes = self._episodes(policy, plan, logger, root)
+        if root is not None:
+            logger.send_blueprint(training_blueprint(self.curves, root, self.cfg.env.threshold))
+        nominal = [m for (name, _, _), m in zip(plan, episodes, strict=True) if not name]
         summary = summarise_episodes(nominal, check.catch_time)
         record = {"frames": frames, "duration": duration, **summary}
         record["episodes"] = [episode.to_dict() for episode in nominal]
@@ -94,16 +91,25 @@ class Evaluations:
         logger.log_metrics(metrics, frames)
         return record
 
-    def _episodes(self, policy: ActorPolicy, plan: list[tuple]) -> list[EpisodeMetrics]:
-        """The episodes of ``plan`` (condition, env arguments, seed), as one batch."""
-        if not plan:
-            return []
+    def _episodes(
+        self, policy: ActorPolicy, plan: list[tuple], logger: RerunLogger, root: str | None
+    ) -> list[EpisodeMetrics]:
+        """The episodes of ``plan`` (condition, env arguments, seed), as one batch; with
+        ``root``, the first recorded there."""
         base = OmegaConf.to_container(self.cfg.env, resolve=True)
         envs = [{**base, **overrides} for _, overrides, _ in plan]
         batch = JuggleBatch(len(plan), autoreset=False, **per_env_arguments(envs))
-        episodes = run_episodes(batch, batch_policy(policy, len(plan)), [s for *_, s in plan])
-        batch.close()
-        return episodes
+        recorder = None
+        if root is not None:
+            fps = self.cfg.logger.scene_fps
+            recorder = BatchEnvRecorder(batch, 0, logger.recording, root, fps)
+        try:
+            policies = batch_policy(policy, len(plan))
+            return run_episodes(batch, policies, [s for *_, s in plan], recorder)
+        finally:
+            if recorder is not None:
+                recorder.track.end()
+            batch.close()
 
     def keep_if_best(self, record: dict, actor) -> None:
         """With ``eval.keep_best``, keep ``actor``'s weights if ``record`` is the best so far."""

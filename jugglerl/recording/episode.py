@@ -1,4 +1,5 @@
-"""``EpisodeRecorder``: records episodes of the juggling env in 3D, with the ball-height plot;
+"""``EpisodeTrack``: records episodes of one juggling env (of a ``JuggleEnv`` or of a batch) in
+3D, with the ball-height plot; ``EpisodeRecorder``: a ``JuggleEnv`` wrapped to record with it;
 ``record_episode``: one recorded episode of a policy."""
 
 from __future__ import annotations
@@ -30,10 +31,11 @@ HEIGHT_COLOUR = [230, 60, 60]
 FRAMES_PER_SEND = 3000
 
 
-class EpisodeRecorder(gym.Wrapper):
-    """Records every episode of the wrapped ``JuggleEnv`` into a rerun stream.
+class EpisodeTrack:
+    """Records episodes of one juggling env (its MuJoCo ``model`` and ``data``, the env of a
+    ``JuggleEnv`` or of a ``JuggleBatch``) into a rerun stream, from its info after each step.
 
-    Under ``root`` (``""`` for the top level):
+    Under an episode's ``root`` (``""`` for the top level):
 
     - ``world/...``: the static geometry once, then the moving bodies' transforms at
       ``scene_fps`` frames per simulated second (the ball at ``world/ball``), and the threshold as
@@ -44,61 +46,67 @@ class EpisodeRecorder(gym.Wrapper):
       ``info["throws_per_ball"]``).
 
     All on the ``sim_time`` timeline. Samples are buffered and sent in columns (a log call per
-    sample would cost more than the physics). To record several episodes in one stream, give each
-    its own ``root`` (e.g. ``eval/episodes/0005``), set before its ``reset``.
+    sample would cost more than the physics). ``begin(root, info)`` after the env's reset,
+    ``sample(info)`` after each step, ``end()`` when the episode ends (or is abandoned).
     """
 
     def __init__(
-        self, env: gym.Env, stream: rr.RecordingStream, root: str = "", scene_fps: float = 50.0
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        threshold: float,
+        balls: int,
+        stream: rr.RecordingStream,
+        scene_fps: float = 50.0,
     ):
-        super().__init__(env)
         if scene_fps <= 0:
             raise ValueError(f"scene_fps must be > 0 frames per second, got {scene_fps}")
         self.stream = stream
-        self.root = root
         self.frame_period = 1.0 / scene_fps
-        juggle = env.unwrapped
-        self._model = juggle.model
-        self._data = juggle.data
-        self._kinematics = mujoco.MjData(self._model)  # scratch: poses at the current state
-        self._threshold = juggle.threshold
-        self._cup_site = self._model.site(CUP_SITE).id
-        self._moving = moving_bodies(self._model)
+        self._model = model
+        self._data = data
+        self._kinematics = mujoco.MjData(model)  # scratch: poses at the current state
+        self._threshold = threshold
+        self._balls = balls
+        self._cup_site = model.site(CUP_SITE).id
+        self._moving = moving_bodies(model)
         self._roots_with_scene: set[str] = set()
         self._recording = False
 
-    # --- gymnasium ------------------------------------------------------------------------
-    def reset(self, **kwargs):
-        self._send()  # an episode abandoned by the caller keeps what was recorded
-        observation, info = self.env.reset(**kwargs)
-        self._world = join(self.root, WORLD)
-        self._plots = join(self.root, PLOTS)
+    @classmethod
+    def of_batch_env(
+        cls, batch, env: int, stream: rr.RecordingStream, scene_fps: float = 50.0
+    ) -> EpisodeTrack:
+        """The track of env ``env`` of a ``JuggleBatch``."""
+        threshold = batch.settings.env(env)["threshold"]
+        model, data = batch.models[env], batch.datas[env]
+        return cls(model, data, threshold, batch.balls, stream, scene_fps)
+
+    def begin(self, root: str, info: dict) -> None:
+        """Start an episode under ``root`` from the env's state after its reset."""
+        self.end()  # an episode abandoned by the caller keeps what was recorded
+        self._world = join(root, WORLD)
+        self._plots = join(root, PLOTS)
         self._paths = body_paths(self._model, self._world)
-        if self.root not in self._roots_with_scene:
+        if root not in self._roots_with_scene:
             self._log_static()
-            self._roots_with_scene.add(self.root)
+            self._roots_with_scene.add(root)
         self._start_buffers()
         self._recording = True
         self._next_frame = 0.0
         self._throws_per_ball = info["throws_per_ball"]
         self._sample(info)
-        return observation, info
 
-    def step(self, action):
-        observation, reward, terminated, truncated, info = self.env.step(action)
+    def sample(self, info: dict) -> None:
+        """The env's state after a step of the running episode (ignored between episodes)."""
         if self._recording:
             self._sample(info)
-            if terminated or truncated:
-                self._send()
-                self._recording = False
-        return observation, reward, terminated, truncated, info
 
-    def close(self):
+    def end(self) -> None:
+        """Send what the episode has left buffered; later samples are ignored until ``begin``."""
         self._send()
         self._recording = False
-        super().close()
 
-    # --- recording ------------------------------------------------------------------------
     def _log_static(self) -> None:
         log_static_scene(self.stream, self._model, self._world)
         self._log_threshold_square()
@@ -107,7 +115,7 @@ class EpisodeRecorder(gym.Wrapper):
             rr.SeriesLines(colors=[HEIGHT_COLOUR], names=["ball height (m)"]),
             static=True,
         )
-        for ball in range(1, self.env.unwrapped.balls):
+        for ball in range(1, self._balls):
             colour = self._model.geom(ball_name(ball)).rgba[:3]
             self.stream.log(
                 join(self._plots, _height_series(ball)),
@@ -209,6 +217,64 @@ class EpisodeRecorder(gym.Wrapper):
                     quaternion=quaternions[:, body].astype(np.float32),
                 ),
             )
+
+
+class EpisodeRecorder(gym.Wrapper):
+    """Records every episode of the wrapped ``JuggleEnv`` into a rerun stream (``EpisodeTrack``
+    says what and where). To record several episodes in one stream, give each its own ``root``
+    (e.g. ``eval/episodes/0005``), set before its ``reset``."""
+
+    def __init__(
+        self, env: gym.Env, stream: rr.RecordingStream, root: str = "", scene_fps: float = 50.0
+    ):
+        super().__init__(env)
+        juggle = env.unwrapped
+        self.root = root
+        self.track = EpisodeTrack(
+            juggle.model, juggle.data, juggle.threshold, juggle.balls, stream, scene_fps
+        )
+
+    def reset(self, **kwargs):
+        self.track.end()
+        observation, info = self.env.reset(**kwargs)
+        self.track.begin(self.root, info)
+        return observation, info
+
+    def step(self, action):
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        self.track.sample(info)
+        if terminated or truncated:
+            self.track.end()
+        return observation, reward, terminated, truncated, info
+
+    def close(self):
+        self.track.end()
+        super().close()
+
+
+class BatchEnvRecorder:
+    """Records the episode of env ``env`` of a ``JuggleBatch`` under ``root`` as
+    ``jugglerl.batch.episodes.run_episodes`` steps the batch (its ``on_step``): the episode runs
+    with the others, in the same forward passes, instead of alone after them."""
+
+    def __init__(
+        self, batch, env: int, stream: rr.RecordingStream, root: str, scene_fps: float = 50.0
+    ):
+        self.track = EpisodeTrack.of_batch_env(batch, env, stream, scene_fps)
+        self.batch, self.env, self.root = batch, env, root
+        self._begun = False
+
+    def __call__(self, moved: np.ndarray) -> None:
+        if not moved[self.env]:
+            return
+        info = self.batch.env_info(self.env)
+        if not self._begun:  # the reset
+            self.track.begin(self.root, info)
+            self._begun = True
+        else:
+            self.track.sample(info)
+        if self.batch.terminated[self.env] or self.batch.truncated[self.env]:
+            self.track.end()
 
 
 def record_episode(
