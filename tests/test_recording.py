@@ -20,8 +20,9 @@ from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.episode import BatchEnvRecorder, EpisodeRecorder
-from jugglerl.recording.logger import RerunLogger
+from jugglerl.recording.logger import RerunLogger, has_footer
 from jugglerl.recording.reading import column, entities, timelines
+from jugglerl.run_files import RunFileError
 from jugglerl_envs import JuggleBatch, JuggleEnv
 from jugglerl_envs.events import count_throws
 
@@ -39,6 +40,24 @@ def verify(path: Path) -> None:
 
 
 # --- RerunLogger ---------------------------------------------------------------------------
+def test_a_recording_left_without_its_footer_is_a_failed_write(tmp_path):
+    """rerun's writer does not report a footer it could not write (a disk full at the end)."""
+    logger = RerunLogger("train", tmp_path)
+    logger.log_scalar("x", 1.0, step=0)
+    close = logger._close_at_exit
+
+    def close_and_lose_the_footer():
+        close()
+        logger.path.write_bytes(logger.path.read_bytes()[:-8])
+
+    logger._close_at_exit = close_and_lose_the_footer
+    with pytest.raises(RunFileError, match=r"train.rrd: could not write the recording \(its foot"):
+        logger.shutdown()
+    with RerunLogger("whole", tmp_path) as whole:
+        whole.log_scalar("x", 1.0, step=0)
+    assert has_footer(whole.path)
+
+
 @pytest.mark.parametrize("flush_every", [0.0, 60.0])  # a send per value, or one at shutdown
 def test_scalars_of_a_training_loop_are_all_there_with_their_steps(tmp_path, flush_every):
     steps = list(range(0, 2000, 100))

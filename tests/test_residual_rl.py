@@ -199,9 +199,9 @@ def test_a_perturbed_stage_splits_its_envs_among_the_conditions(tmp_path):
     perturbed = f"+algo.stages=[{{name: rl, perturbed: {conditions}}}]"
     cfg = train_config(*TINY, "collector.num_envs=3", "collector.frames_per_batch=129", perturbed)
     training = OffPolicyTraining(cfg, tmp_path)
-    envs = training.env.base_env._env.envs
-    noise = [env.unwrapped.action_noise for env in envs]
-    kicks = [env.unwrapped.kick_rate for env in envs]
+    settings = [training.env.base_env.batch.settings.env(i) for i in range(3)]
+    noise = [env["action_noise"] for env in settings]
+    kicks = [env["kick_rate"] for env in settings]
     assert (noise, kicks) == ([0.0, 0.01, 0.0], [0.0, 0.0, 1.0])
     training.close()
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import threading
 import time
 import uuid
+import warnings
 import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -15,6 +16,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 import yaml
 from omegaconf import DictConfig, OmegaConf
+from rerun.chunk import RrdReader
 from torchrl.record.loggers import Logger
 
 from jugglerl.recording.names import HPARAMS, STEP
@@ -194,12 +196,16 @@ class RerunLogger(Logger):
             rr.unregister_shutdown()
 
     def shutdown(self, timeout: float | None = None) -> None:
-        """Flush, then close the file (writes its footer). Safe to call more than once."""
+        """Flush, then close the file (writes its footer). Safe to call more than once. A file
+        left without its footer (rerun's writer reports no failure of that last write: a disk
+        that filled up at the end) raises ``RunFileError`` naming it."""
         if self._service_shutdown:
             return
         self.flush(timeout)
         self._close_at_exit()
         self._service_shutdown = True
+        if not has_footer(self.path):
+            raise failure(self.path, "write the recording", "its footer is missing")
 
     def __enter__(self) -> RerunLogger:
         return self
@@ -219,6 +225,15 @@ class RerunLogger(Logger):
 
     def __repr__(self) -> str:
         return f"RerunLogger(path={str(self.path)!r}, recording_id={self.recording_id!r})"
+
+
+def has_footer(path: Path) -> bool:
+    """Whether the ``.rrd`` file at ``path`` ends with its footer (rerun's reader warns when it
+    does not, and then scans the whole file)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        RrdReader(str(path))
+    return not any("no footer" in str(warning.message) for warning in caught)
 
 
 def _free_path(folder: Path, stem: str) -> Path:
