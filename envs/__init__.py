@@ -26,6 +26,15 @@ if _chosen.lower().strip() not in (*GL_BACKENDS, *_GL_SWITCHES, "0"):
         f" use one of {', '.join(GL_BACKENDS)}, or unset it"
     )
 
+try:
+    import mujoco  # noqa: E402, F401  (its import loads the OpenGL backend MUJOCO_GL names)
+except Exception as error:  # PyOpenGL fails in many ways on a missing library
+    raise SystemExit(
+        f"error: MUJOCO_GL={_chosen}: MuJoCo could not load"
+        f" this OpenGL backend ({type(error).__name__}: {error}); install its library (OSMesa:"
+        f" apt-get install libosmesa6), choose another of {', '.join(GL_BACKENDS)}, or unset it"
+    ) from None
+
 import gymnasium  # noqa: E402
 
 from jugglerl_envs.batch import JuggleBatch  # noqa: E402

@@ -119,6 +119,8 @@ def test_a_run_without_stages_is_one_stage_of_its_loss():
         ("algo.stages.0.demonstrations=false", "a demo_fraction needs a stage with demonstrations"),
         ("algo.stages.0.acts=watcher", "algo.stages[0].acts=watcher must be one of teacher, stud"),
         ("algo.stages.1.noise=-0.1", "algo.stages[1].noise=-0.1 must be a number >= 0"),
+        ("optim.lr_actor=-1", "optim.lr_actor=-1 is out of range"),  # each stage sets its own
+        ("optim.updates_per_batch=-1", "optim.updates_per_batch=-1 is out of range"),
         ("algo.rl_stage.noise=loud", "algo.stages[2].noise=loud must be a number >= 0"),
         (
             "+algo.rl_stage.exploration.sigma_init=0.01",

@@ -112,3 +112,30 @@ def test_an_unknown_mujoco_gl_is_one_line_before_mujoco_is_imported(tmp_path):
         "error: MUJOCO_GL=foo is not a MuJoCo rendering backend here; use one of egl, osmesa,"
         " glfw, glx, or unset it"
     )
+
+
+def test_a_backend_whose_library_is_missing_is_one_line(tmp_path):
+    """``MUJOCO_GL=osmesa`` without OSMesa: MuJoCo's import fails inside PyOpenGL."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    # as in a user's shell: the tests' own MuJoCo import has set PyOpenGL's platform to EGL
+    environment = {k: v for k, v in os.environ.items() if k != "PYOPENGL_PLATFORM"}
+    environment["MUJOCO_GL"] = "osmesa"
+    probe = subprocess.run([sys.executable, "-c", "import mujoco"], env=environment)
+    if probe.returncode == 0:
+        pytest.skip("OSMesa is installed here: MuJoCo imports with MUJOCO_GL=osmesa")
+    root = Path(__file__).resolve().parents[1]
+    result = subprocess.run(
+        [sys.executable, str(root / "scripts" / "evaluate.py"), f"hydra.run.dir={tmp_path}"],
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    (line,) = result.stderr.strip().splitlines()
+    assert line.startswith("error: MUJOCO_GL=osmesa: MuJoCo could not load this OpenGL backend (")
+    assert line.endswith("choose another of egl, osmesa, glfw, glx, or unset it")

@@ -132,6 +132,7 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
     specs = cfg.algo.get("stages")
     if not specs:
         specs = [{"name": cfg.algo.name, "loss": cfg.algo.loss}]
+    _check_optim(cfg.optim, {}, "algo")  # also where every stage sets its own
     stages, start = [], 0
     for index, spec in enumerate(specs):
         where = f"algo.stages[{index}]"
