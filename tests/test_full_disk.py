@@ -10,7 +10,9 @@ import pytest
 from cli import run_script
 
 #: ``error: PATH: could not write it|the recording|the video (cause)``
-FAILED_WRITE = re.compile(r"^error: \S+: could not write (it|the recording|the video) \(.+\)$")
+FAILED_WRITE = re.compile(
+    r"^error: \S+: could not write (it|the recording|the video|the replay buffer) \(.+\)$"
+)
 
 
 @pytest.mark.parametrize(
@@ -37,6 +39,26 @@ FAILED_WRITE = re.compile(r"^error: \S+: could not write (it|the recording|the v
             ],
             20_000,
             "robustness.rrd",
+        ),
+        (
+            "train.py",  # the replay buffer's memory-mapped files, made at the first batch
+            [
+                "algo=ddpg",
+                "actor=lstm",
+                "env.duration=4",
+                "state.norm_frames=200",
+                "collector.num_envs=2",
+                "collector.frames_per_batch=128",
+                "collector.total_frames=256",
+                "replay_buffer.batch_size=64",
+                "replay_buffer.slice_len=16",
+                "eval.seeds=1",
+                "eval.duration=2",
+                "eval.catch_time=1",
+                "progress=false",
+            ],
+            20_000_000,
+            "buffers/replay",
         ),
     ],
 )

@@ -23,7 +23,6 @@ SHORT_APPRENTICE = (
     "actor=lstm",
     "collector.num_envs=4",
     "collector.frames_per_batch=256",
-    "collector.total_frames=1024",
     "replay_buffer.batch_size=128",
     "replay_buffer.slice_len=32",
     "algo.stages.0.until=512",
@@ -61,13 +60,22 @@ def without_wall_times(metrics: dict) -> dict:
     return {key: value for key, value in metrics.items() if key not in ("wall_seconds", "seconds")}
 
 
-@pytest.mark.parametrize("stage, killed_at", [("bc", 512), ("dagger", 1024)])
+def short_apprentice(total_frames: int):
+    """``SHORT_APPRENTICE`` run to ``total_frames`` (past 1024, into the residual rl stage)."""
+    budget = f"collector.total_frames={total_frames}"
+    return train_config(*SHORT_APPRENTICE, budget, "algo.rl_stage.warmup_frames=256")
+
+
+@pytest.mark.parametrize(
+    "stage, killed_at, total_frames",
+    [("bc", 512, 1024), ("dagger", 1024, 1024), ("rl", 1536, 1536)],
+)
 @pytest.mark.slow
 def test_a_run_killed_after_a_checkpoint_resumes_to_the_uninterrupted_run(
-    tmp_path, monkeypatch, stage, killed_at
+    tmp_path, monkeypatch, stage, killed_at, total_frames
 ):
     straight = run(
-        OffPolicyTraining(train_config(*SHORT_APPRENTICE), tmp_path / "a"), tmp_path / "a"
+        OffPolicyTraining(short_apprentice(total_frames), tmp_path / "a"), tmp_path / "a"
     )
 
     learn = OffPolicyTraining._learn
@@ -80,12 +88,12 @@ def test_a_run_killed_after_a_checkpoint_resumes_to_the_uninterrupted_run(
     monkeypatch.setattr(OffPolicyTraining, "_learn", learn_then_die)
     killed = tmp_path / "b"
     with pytest.raises(KilledError):
-        run(OffPolicyTraining(train_config(*SHORT_APPRENTICE), killed), killed)
+        run(OffPolicyTraining(short_apprentice(total_frames), killed), killed)
     monkeypatch.setattr(OffPolicyTraining, "_learn", learn)
 
-    cfg, _, state = resume_state(str(killed), train_config(*SHORT_APPRENTICE), [])
+    cfg, _, state = resume_state(str(killed), short_apprentice(total_frames), [])
     assert state["counters"]["frames"] == killed_at - 256
-    assert state["stage"] == ["bc", "dagger"].index(stage)
+    assert state["stage"] == ["bc", "dagger", "rl"].index(stage)
     resumed = run(OffPolicyTraining(cfg, killed, state), killed)
     assert without_wall_times(resumed) == without_wall_times(straight)
 

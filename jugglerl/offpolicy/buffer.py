@@ -111,7 +111,7 @@ class ReplayBuffer:
         self._check_space(flat)
         try:
             self._buffer.extend(flat)
-        except OSError as error:  # the memory-mapped files could not be made or grown
+        except (OSError, RuntimeError) as error:  # torch's memory maps could not be made
             raise failure(self.folder, "write the replay buffer", error) from None
         if self.slice_len is None:
             self._longest_piece = 1
