@@ -8,6 +8,7 @@ import re
 
 import pytest
 from cli import run_script
+from test_offpolicy_training import TINY
 
 #: ``error: PATH: could not write it|the recording|the video (cause)``
 FAILED_WRITE = re.compile(
@@ -42,21 +43,7 @@ FAILED_WRITE = re.compile(
         ),
         (
             "train.py",  # the replay buffer's memory-mapped files, made at the first batch
-            [
-                "algo=ddpg",
-                "actor=lstm",
-                "env.duration=4",
-                "state.norm_frames=200",
-                "collector.num_envs=2",
-                "collector.frames_per_batch=128",
-                "collector.total_frames=256",
-                "replay_buffer.batch_size=64",
-                "replay_buffer.slice_len=16",
-                "eval.seeds=1",
-                "eval.duration=2",
-                "eval.catch_time=1",
-                "progress=false",
-            ],
+            [*TINY, "actor=lstm", "replay_buffer.slice_len=16"],
             20_000_000,
             "buffers/replay",
         ),
