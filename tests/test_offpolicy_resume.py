@@ -186,3 +186,15 @@ def test_a_gym_collector_resumes_with_new_episodes_and_says_so(tmp_path, capsys)
     OffPolicyTraining(cfg, tmp_path, state).close()
     assert "note: the envs start new episodes" in capsys.readouterr().err
     assert load_checkpoint(tmp_path)["collector"] == {}
+
+
+@pytest.mark.slow
+def test_a_resume_with_another_number_of_envs_starts_new_episodes_and_says_so(tmp_path, capsys):
+    cut = "collector.total_frames=256"  # stops inside the bc stage
+    run(OffPolicyTraining(train_config(*SHORT_APPRENTICE, cut), tmp_path), tmp_path)
+    more = ("collector.total_frames=512", "collector.num_envs=2", "collector.frames_per_batch=128")
+    cfg, _, state = resume_state(str(tmp_path), train_config(*SHORT_APPRENTICE, *more), list(more))
+    training = OffPolicyTraining(cfg, tmp_path, state)
+    assert "note: the envs start new episodes" in capsys.readouterr().err
+    assert training.collector.carried is None and len(training.buffer) == 256
+    training.close()

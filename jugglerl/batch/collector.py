@@ -88,11 +88,14 @@ class BatchCollector:
             "next_trajectory": self.next_trajectory,
         }
 
-    def load_state_dict(self, state: dict) -> None:
-        """Continue the episodes of ``state_dict()``; an empty one leaves the envs to start new
-        episodes at the next batch."""
+    def load_state_dict(self, state: dict) -> bool:
+        """Continue the episodes of ``state_dict()``; ``False`` (the envs start new episodes at
+        the next batch) for an empty one, or one of another number of envs."""
         if not state or not self.resumes_exactly:
-            return
+            return False
+        if len(state["envs"]["physics"]) != self.env.batch_size.numel():
+            return False
         self.env.base_env.batch.load_state_dict(state["envs"])
         self.carried = state["carried"]
         self.next_trajectory = state.get("next_trajectory", 0)
+        return True

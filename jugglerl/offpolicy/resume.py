@@ -4,8 +4,8 @@ A checkpoint restores the networks, optimisers, exploration, RNG states, the env
 episodes (on a ``JuggleBatchEnv``), the teacher's state and the replay buffers (reopened from the
 run folder), so that a resumed run repeats an uninterrupted one. Three things can be missing: the
 buffers' files (a checkpoint moved without its run folder), the episodes (``collector.env=gym``
-cannot save them) and, in a buffer that was full, old frames that frames collected after the
-checkpoint replaced.
+cannot save them; a resume with another ``collector.num_envs`` cannot continue them) and, in a
+buffer that was full, old frames that frames collected after the checkpoint replaced.
 """
 
 from __future__ import annotations
@@ -49,7 +49,8 @@ def resume_notes(
         )
     if not episodes_restored:
         notes.append(
-            "note: the envs start new episodes (collector.env=gym cannot save the running"
-            " ones; collector.env=batch does): the run does not repeat an uninterrupted one"
+            "note: the envs start new episodes (collector.env=gym cannot save the running ones,"
+            " and a checkpoint of another collector.num_envs cannot continue them): the run does"
+            " not repeat an uninterrupted one"
         )
     return notes

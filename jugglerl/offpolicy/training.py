@@ -279,9 +279,10 @@ class OffPolicyTraining(ActorTraining):
         self.update.load_state_dict(state["update"])
         self.noise.load_state_dict(state["exploration"])
         self.load_common_state(state)
-        self.collector.load_state_dict(state.get("collector", {}))
+        continued = self.collector.load_state_dict(state.get("collector", {}))
         for teacher, episodes in zip(self.teacher, state.get("teacher", []), strict=False):
-            teacher.load_episode_state(episodes)
+            if continued:  # the teacher's episodes are the envs'
+                teacher.load_episode_state(episodes)
         buffers = state.get("buffers", {})
         restored = all(
             buffer.load_state_dict(buffers[name])
@@ -289,7 +290,7 @@ class OffPolicyTraining(ActorTraining):
             if name in buffers
         )
         mid_stage = self.stage.start < self.frames < self.stage.end
-        episodes = bool(state.get("collector")) or not mid_stage  # a new stage starts new ones
+        episodes = continued or not mid_stage  # a new stage starts new ones anyway
         restored = restored and bool(buffers)
         for note in resume_notes(self.stages, self.frames, self.buffer, restored, episodes):
             print(note, file=sys.stderr)
