@@ -22,6 +22,7 @@ from torchrl.envs import EnvBase
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
 from jugglerl.batch.torchrl_env import JuggleBatchEnv
+from jugglerl.interrupts import deferred_interrupt
 
 #: Where each step's trajectory id is written (TorchRL's collectors' key).
 TRAJECTORY_KEY = ("collector", "traj_ids")
@@ -47,16 +48,20 @@ class BatchCollector:
 
     def collect(self, policy, steps: int, random: bool = False) -> TensorDict:
         """``steps`` steps of every env under ``policy`` (sampling its exploration), or of
-        uniformly random actions with ``random``: a tensordict ``[num_envs, steps]``."""
+        uniformly random actions with ``random``: a tensordict ``[num_envs, steps]``. A Ctrl-C
+        during the batch is raised once it is whole and carried, so that a checkpoint never
+        pairs envs stepped part of a batch with the steps carried from the batch before (the
+        interrupted batch itself is dropped: a resume after a Ctrl-C continues the episodes but
+        does not repeat the uninterrupted run exactly, as one from a periodic checkpoint does)."""
         carried = self.carried if self.carried is not None else self._start()
         trajectory = []
-        with torch.no_grad(), set_exploration_type(ExplorationType.RANDOM):
+        with deferred_interrupt(), torch.no_grad(), set_exploration_type(ExplorationType.RANDOM):
             for _ in range(steps):
                 carried = self.env.rand_action(carried) if random else policy(carried)
                 step, carried = self.env.step_and_maybe_reset(carried)
                 trajectory.append(step)
                 carried.set(TRAJECTORY_KEY, self._numbered(step))
-        self.carried = carried
+            self.carried = carried
         return torch.stack(trajectory, dim=1)
 
     def _start(self) -> TensorDict:
