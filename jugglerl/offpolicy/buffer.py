@@ -153,8 +153,8 @@ class ReplayBuffer:
         return len(self) >= self.capacity
 
     def state_dict(self) -> dict:
-        """How far the buffer has filled (its frames are in ``folder``), for a checkpoint; the
-        memory maps are synced to their files first."""
+        """How far the buffer has filled (its frames are in ``folder``), for a checkpoint;
+        TorchRL's metadata files beside the frames are brought up to date with it."""
         if self.folder is None:
             raise ValueError("a replay buffer without a folder keeps its frames in memory only")
         state = {
