@@ -69,7 +69,7 @@ def test_values_are_compared_with_the_type_of_the_default(default, value, expect
         ("evaluate.py", "durationn=2", "error: durationn=2: the config has no durationn; the"),
     ],
 )
-def test_a_group_choice_without_its_file_is_one_error_line(tmp_path, script, override, message):
+def test_an_unknown_group_choice_or_key_is_one_error_line(tmp_path, script, override, message):
     result = run_script(script, *override.split(), f"hydra.run.dir={tmp_path}")
     assert result.returncode == 1
     assert result.stderr.strip() == result.stderr.strip().splitlines()[0]

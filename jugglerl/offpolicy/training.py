@@ -280,17 +280,15 @@ class OffPolicyTraining(ActorTraining):
         self.noise.load_state_dict(state["exploration"])
         self.load_common_state(state)
         continued = self.collector.load_state_dict(state.get("collector", {}))
-        for teacher, episodes in zip(self.teacher, state.get("teacher", []), strict=False):
-            if continued:  # the teacher's episodes are the envs'
+        if continued:  # the teacher's episodes are the envs'
+            for teacher, episodes in zip(self.teacher, state["teacher"], strict=True):
                 teacher.load_episode_state(episodes)
-        buffers = state.get("buffers", {})
-        restored = all(
+        buffers = state.get("buffers")  # absent from checkpoints written before they were kept
+        restored = buffers is not None and all(
             buffer.load_state_dict(buffers[name])
             for buffer, name in ((self.buffer, "replay"), (self.demonstrations, "demonstrations"))
-            if name in buffers
         )
         mid_stage = self.stage.start < self.frames < self.stage.end
         episodes = continued or not mid_stage  # a new stage starts new ones anyway
-        restored = restored and bool(buffers)
         for note in resume_notes(self.stages, self.frames, self.buffer, restored, episodes):
             print(note, file=sys.stderr)

@@ -235,9 +235,8 @@ class EpisodeRecorder(gym.Wrapper):
         )
 
     def reset(self, **kwargs):
-        self.track.end()
         observation, info = self.env.reset(**kwargs)
-        self.track.begin(self.root, info)
+        self.track.begin(self.root, info)  # sends what an abandoned episode left first
         return observation, info
 
     def step(self, action):
