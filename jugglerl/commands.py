@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jugglerl.policy_files import PolicyFileError, read_policy_file, write_policy_file
+from jugglerl.runs.policy_files import PolicyFileError, read_policy_file, write_policy_file
 
 KIND = "command"
 KEYS = ("kind", "name", "cycle", "pan", "lead_in", "via_points")

@@ -17,10 +17,10 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from jugglerl.checkpoints import CHECKPOINT, load_checkpoint
-from jugglerl.interrupts import stop_on_interrupt
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.run_files import BUFFERS, METRICS, PARTIAL, write_atomically
+from jugglerl.runs.checkpoints import CHECKPOINT, load_checkpoint
+from jugglerl.runs.files import BUFFERS, METRICS, PARTIAL, write_atomically
+from jugglerl.runs.interrupts import stop_on_interrupt
 
 TRAINERS = {
     "offpolicy": "jugglerl.offpolicy.training:OffPolicyTraining",
@@ -123,7 +123,7 @@ def save_hydra_record(run_dir: Path, cfg: DictConfig) -> None:
 def train(cfg: DictConfig, run_dir: Path, state: dict | None) -> None:
     """Run ``cfg``'s trainer in ``run_dir`` (resumed from ``state``), recording to its ``.rrd``;
     print the result, or on Ctrl-C how to continue. The first Ctrl-C stops the run, the later
-    ones are ignored while it saves and closes (``jugglerl.interrupts``)."""
+    ones are ignored while it saves and closes (``jugglerl.runs.interrupts``)."""
     with stop_on_interrupt():
         try:
             training = trainer_class(cfg.algo.trainer)(cfg, run_dir, state)  # a bad config fails

@@ -20,16 +20,16 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episodes
-from jugglerl.config import make_juggle_env
-from jugglerl.config_types import check_override_types, exit_on_bad_command_line
-from jugglerl.evaluation import EpisodeMetrics, summarise_episodes
+from jugglerl.config.command_line import check_override_types, exit_on_bad_command_line
+from jugglerl.config.envs import make_juggle_env
+from jugglerl.policies.episodes import EpisodeMetrics, summarise_episodes
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.blueprint import episode_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import SUMMARY
 from jugglerl.recording.video import VideoOptionError, VideoRecorder, render_options
-from jugglerl.run_files import exits_on_run_file_errors, write_json
+from jugglerl.runs.files import exits_on_run_file_errors, write_json
 from jugglerl_envs import JuggleBatch
 from jugglerl_envs.validation import check_number
 

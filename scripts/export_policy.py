@@ -17,12 +17,12 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from jugglerl.config_types import exit_on_bad_command_line
+from jugglerl.config.command_line import exit_on_bad_command_line
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.actor_file import read_actor_weights
 from jugglerl.policies.export import export
-from jugglerl.policy_files import check_policy_named
-from jugglerl.run_files import exits_on_run_file_errors
+from jugglerl.runs.files import exits_on_run_file_errors
+from jugglerl.runs.policy_files import check_policy_named
 
 
 def default_name(spec: str) -> str:

@@ -24,12 +24,12 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
 from jugglerl.cluster import register_sweep_launcher
-from jugglerl.config import make_juggle_env
-from jugglerl.config_types import check_override_types, exit_on_bad_command_line
+from jugglerl.config.command_line import check_override_types, exit_on_bad_command_line
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.reports import robustness
-from jugglerl.run_files import exits_on_run_file_errors, write_atomically, write_json
+from jugglerl.runs.files import exits_on_run_file_errors, write_atomically, write_json
 from jugglerl_envs.validation import check_number
 
 ROOT = "robustness"

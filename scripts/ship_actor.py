@@ -15,9 +15,9 @@ from pathlib import Path
 
 import yaml
 
-from jugglerl.checkpoints import load_checkpoint
 from jugglerl.policies.actor_file import write_actor_policy
-from jugglerl.policy_files import shipped_folder
+from jugglerl.runs.checkpoints import load_checkpoint
+from jugglerl.runs.policy_files import shipped_folder
 
 
 def header(run: Path, state: dict) -> str:

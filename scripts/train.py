@@ -28,8 +28,8 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from jugglerl.cluster import register_sweep_launcher
-from jugglerl.config_types import check_override_types, exit_on_bad_command_line
-from jugglerl.run_files import RunFileError
+from jugglerl.config.command_line import check_override_types, exit_on_bad_command_line
+from jugglerl.runs.files import RunFileError
 from jugglerl.training import check_cluster, resume_state, train
 
 

@@ -48,7 +48,7 @@ def train_config(*overrides: str):
 
 def env_preset(name: str, **overrides):
     """The env of preset ``configs/env/<name>.yaml`` with keyword ``overrides``."""
-    from jugglerl.config import make_juggle_env
+    from jugglerl.config.envs import make_juggle_env
 
     return make_juggle_env(train_config(f"env={name}").env, **overrides)
 

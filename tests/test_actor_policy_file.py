@@ -13,13 +13,13 @@ from omegaconf import OmegaConf
 
 import jugglerl.policies.feedback as feedback
 import jugglerl.policies.throw_catch as throw_catch
-from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import run_episode
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.networks.actors import ACTION_SIZE, build_actor
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.policies.actor_file import write_actor_policy
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
-from jugglerl.policy_files import PolicyFileError
+from jugglerl.runs.policy_files import PolicyFileError
 from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv
 

@@ -7,11 +7,11 @@ from closed_loop_episode import RECORDED, play
 
 import jugglerl  # noqa: F401  (registers the id)
 from jugglerl.commands import load_command
-from jugglerl.evaluation import run_episode
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.feedback import LOCK_HEIGHT, FeedbackGains, FeedbackPolicy
 from jugglerl.policies.loading import load_policy
 from jugglerl.policies.throw_catch import ThrowCatchPolicy
-from jugglerl.policy_files import PolicyFileError
+from jugglerl.runs.policy_files import PolicyFileError
 from jugglerl_envs import JuggleEnv
 
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from jugglerl.commands import CommandError, ViaPointCommand, load_command, save_command
-from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
-from jugglerl.policy_files import PolicyFileError
+from jugglerl.policies.episodes import run_episode
+from jugglerl.runs.policy_files import PolicyFileError
 from jugglerl_envs import JuggleEnv
 
 

@@ -5,7 +5,12 @@ import pytest
 from cli import run_script
 from omegaconf import OmegaConf
 
-from jugglerl.config_types import CONFIG_DIR, type_mismatch, unknown_group_choice, unknown_key
+from jugglerl.config.command_line import (
+    CONFIG_DIR,
+    type_mismatch,
+    unknown_group_choice,
+    unknown_key,
+)
 
 
 @pytest.mark.parametrize(

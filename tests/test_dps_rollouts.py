@@ -11,8 +11,8 @@ from jugglerl.commands import ViaPointCommand, load_command
 from jugglerl.dps.distribution import sample_commands
 from jugglerl.dps.params import ViaPointConstraints
 from jugglerl.dps.rollouts import CommandRollouts
-from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
+from jugglerl.policies.episodes import run_episode
 from jugglerl_envs import JuggleEnv
 
 

@@ -7,7 +7,6 @@ import pytest
 import torch
 from cli import interrupt_train, rrd_verifies, run_train, train_config
 
-from jugglerl.checkpoints import load_checkpoint
 from jugglerl.commands import load_command
 from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import PAPER_STDS, SearchDistribution
@@ -17,10 +16,11 @@ from jugglerl.dps.params import (
 )
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.dps.training import SearchTraining
-from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
+from jugglerl.policies.episodes import run_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column
+from jugglerl.runs.checkpoints import load_checkpoint
 from jugglerl_envs import JuggleEnv
 
 SHORT = [

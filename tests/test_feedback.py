@@ -10,11 +10,11 @@ import yaml
 from cli import env_preset, run_script, run_train, train_config
 
 from jugglerl.commands import CommandError, load_command
-from jugglerl.config import make_juggle_env
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
 from jugglerl.dps.spaces.feedback_gains import FeedbackGainSpace
-from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.feedback import (
     FIXED_NAMES,
     LOCK_HEIGHT,
@@ -252,7 +252,7 @@ def test_every_shipped_policy_keeps_its_throws_honest():
     no two balls share the cup (they pass through each other: two would juggle as one); each
     one-ball juggler throws at least the paper's 39 (two balls: test_balls.py,
     test_throw_catch_balls.py)."""
-    from jugglerl.policy_files import read_policy_file, shipped_names
+    from jugglerl.runs.policy_files import read_policy_file, shipped_names
 
     for name in shipped_names():
         data = read_policy_file(name)[0]

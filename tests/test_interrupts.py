@@ -6,7 +6,7 @@ import signal
 
 import pytest
 
-from jugglerl.interrupts import deferred_interrupt, stop_on_interrupt
+from jugglerl.runs.interrupts import deferred_interrupt, stop_on_interrupt
 
 
 def ctrl_c():

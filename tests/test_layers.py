@@ -4,6 +4,7 @@ import ast
 from pathlib import Path
 
 import pytest
+import tomllib
 
 PACKAGE = Path(__file__).resolve().parents[1] / "jugglerl"
 
@@ -76,3 +77,19 @@ def test_no_two_packages_import_each_other_even_through_others():
 @pytest.mark.parametrize("lower", ["jugglerl.policies", "jugglerl.networks", "jugglerl.state"])
 def test_what_deploys_a_policy_never_needs_the_trainer(lower):
     assert "jugglerl.offpolicy" not in import_graph()[lower]
+
+
+def test_every_package_folder_is_installed():
+    """A non-editable ``pip install .`` installs only the packages pyproject.toml lists."""
+
+    listed = set(
+        tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())["tool"]["setuptools"][
+            "packages"
+        ]
+    )
+    folders = {
+        ".".join(path.parent.relative_to(PACKAGE.parent).parts)
+        for path in PACKAGE.rglob("__init__.py")
+        if "_hydra_plugin" not in path.parts
+    }
+    assert folders - listed == set()

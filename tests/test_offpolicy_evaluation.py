@@ -5,9 +5,9 @@ import pytest
 from cli import train_config
 
 from jugglerl.batch.evaluations import Evaluations, score
-from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import run_episode, summarise_episodes
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.offpolicy.checks import check_config
+from jugglerl.policies.episodes import run_episode, summarise_episodes
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.logger import RerunLogger
 

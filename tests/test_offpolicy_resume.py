@@ -7,14 +7,14 @@ import torch
 from cli import train_config
 from tensordict import TensorDict
 
-from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy import buffer as module
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.resume import resume_notes
 from jugglerl.offpolicy.stages import stages_from_config
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.run_files import RunFileError
+from jugglerl.runs.checkpoints import load_checkpoint
+from jugglerl.runs.files import RunFileError
 from jugglerl.training import resume_state
 
 #: The default pipeline (a teacher, bc then DAgger, an LSTM on slices) in a few seconds: 4 envs

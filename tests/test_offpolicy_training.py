@@ -9,10 +9,10 @@ from cli import interrupt_train, rrd_verifies, run_script, run_train, train_conf
 from tensordict import TensorDict
 
 from jugglerl.batch.batch_stats import BatchStats
-from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.reading import column
+from jugglerl.runs.checkpoints import load_checkpoint
 
 #: A few hundred frames: 2 envs x 64 steps per batch, short episodes and evaluations.
 TINY = [

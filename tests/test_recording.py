@@ -16,13 +16,13 @@ from test_evaluate_script import run_evaluate
 
 from jugglerl.batch.episodes import batch_policy, run_episodes
 from jugglerl.commands import load_command
-from jugglerl.evaluation import run_episode
 from jugglerl.policies.command import CommandPolicy
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.episode import BatchEnvRecorder, EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger, has_footer
 from jugglerl.recording.reading import column, entities, timelines
-from jugglerl.run_files import RunFileError
+from jugglerl.runs.files import RunFileError
 from jugglerl_envs import JuggleBatch, JuggleEnv
 from jugglerl_envs.events import count_throws
 

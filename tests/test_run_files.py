@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 import torch
 
-import jugglerl.checkpoints as checkpoints
-from jugglerl.checkpoints import load_checkpoint, save_checkpoint
+import jugglerl.runs.checkpoints as checkpoints
 from jugglerl.recording.logger import FLUSH_TIMEOUT, RerunLogger
-from jugglerl.run_files import RunFileError, write_json
+from jugglerl.runs.checkpoints import load_checkpoint, save_checkpoint
+from jugglerl.runs.files import RunFileError, write_json
 
 
 def test_a_checkpoint_write_that_fails_midway_leaves_the_previous_one_and_no_partial(
@@ -79,10 +79,10 @@ faulthandler.dump_traceback_later(50, exit=True)
 import sys
 import torch
 from pathlib import Path
-from jugglerl.checkpoints import save_checkpoint
+from jugglerl.runs.checkpoints import save_checkpoint
 from jugglerl.recording import logger as logger_module
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.run_files import RunFileError
+from jugglerl.runs.files import RunFileError
 
 logger_module.FLUSH_TIMEOUT = 3.0  # the bound under test, shorter than a run's 30 s
 folder = Path(sys.argv[1])

@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from jugglerl.policies.loading import load_policy
-from jugglerl.policy_files import policy_file
+from jugglerl.runs.policy_files import policy_file
 from jugglerl.training import prepare_run_folder
 from jugglerl_envs import JuggleEnv
 

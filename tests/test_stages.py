@@ -12,11 +12,11 @@ from omegaconf import OmegaConf
 from tensordict import TensorDict
 from test_offpolicy_training import TINY, train
 
-from jugglerl.checkpoints import load_checkpoint
 from jugglerl.offpolicy.stages import StopRule, stages_from_config, stopped_early
 from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.policies.loading import load_policy
+from jugglerl.runs.checkpoints import load_checkpoint
 from jugglerl.training import resume_state
 from jugglerl_envs import JuggleEnv
 

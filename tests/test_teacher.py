@@ -8,10 +8,10 @@ from tensordict.nn import TensorDictModule, TensorDictSequential
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
 from jugglerl.batch.env_stack import make_env
-from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import run_episode
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.networks.actors import build_actor
 from jugglerl.offpolicy.teacher import TEACHER_ACTION, TeacherModule, teacher_period
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl.state.transforms import state_size
 from jugglerl_envs import JuggleEnv

@@ -11,9 +11,9 @@ import yaml
 from cli import env_preset, run_script
 
 from jugglerl.commands import CommandError
-from jugglerl.evaluation import run_episode
 from jugglerl.policies import feedback
 from jugglerl.policies.cup_ik import CupIK
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl.policies.throw_catch import (
     ThrowCatch,
@@ -21,7 +21,7 @@ from jugglerl.policies.throw_catch import (
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
-from jugglerl.policy_files import read_policy_file
+from jugglerl.runs.policy_files import read_policy_file
 from jugglerl_envs import JuggleEnv
 
 

@@ -15,7 +15,7 @@ from jugglerl.policies.throw_catch import (
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
-from jugglerl.policy_files import read_policy_file
+from jugglerl.runs.policy_files import read_policy_file
 from jugglerl_envs import JuggleEnv
 
 PAPER_WRIST = (-2.0, 1.5708, 0.0)

@@ -10,7 +10,7 @@ from search_spaces import assert_wide_samples_are_valid_policies
 
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts, within_limits
 from jugglerl.dps.spaces.throw_catch import ThrowCatchSpace
-from jugglerl.evaluation import EpisodeMetrics
+from jugglerl.policies.episodes import EpisodeMetrics
 from jugglerl.policies.flight_fit import FlightFit
 from jugglerl.policies.loading import load_policy
 from jugglerl.policies.throw_catch import ThrowCatchPolicy

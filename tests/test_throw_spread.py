@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from jugglerl.evaluation import run_episode
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl_envs import JuggleEnv
 

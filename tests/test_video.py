@@ -9,7 +9,7 @@ import pytest
 from cli import run_script
 from PIL import Image
 
-from jugglerl.evaluation import run_episode
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.video import VideoError, VideoOptionError, VideoRecorder
 from jugglerl_envs import JuggleEnv

@@ -24,11 +24,11 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from jugglerl.batch.env_stack import normalisation
-from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
-from jugglerl.run_files import METRICS, write_json
+from jugglerl.runs.checkpoints import CHECKPOINT, config_entries, save_checkpoint
+from jugglerl.runs.files import METRICS, write_json
 
 
 class ActorTraining:

@@ -22,7 +22,7 @@ from torchrl.envs import EnvBase
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
 from jugglerl.batch.torchrl_env import JuggleBatchEnv
-from jugglerl.interrupts import deferred_interrupt
+from jugglerl.runs.interrupts import deferred_interrupt
 
 #: Where each step's trajectory id is written (TorchRL's collectors' key).
 TRAJECTORY_KEY = ("collector", "traj_ids")

@@ -18,8 +18,8 @@ from typing import Protocol
 
 import numpy as np
 
-from jugglerl.evaluation import EpisodeMetrics, episode_metrics
 from jugglerl.policies import Policy
+from jugglerl.policies.episodes import EpisodeMetrics, episode_metrics
 from jugglerl_envs import JuggleBatch
 from jugglerl_envs.settings import ARGUMENTS
 

@@ -25,9 +25,9 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episodes
-from jugglerl.config import make_juggle_env
-from jugglerl.evaluation import EpisodeMetrics, summarise_episodes
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.policies.actor import ActorPolicy
+from jugglerl.policies.episodes import EpisodeMetrics, summarise_episodes
 from jugglerl.recording.blueprint import offpolicy_curves, training_blueprint
 from jugglerl.recording.episode import BatchEnvRecorder
 from jugglerl.recording.logger import RerunLogger

@@ -24,7 +24,7 @@ from typing import Any, Protocol
 
 from omegaconf import DictConfig
 
-from jugglerl.registry import Registry
+from jugglerl_envs.registry import Registry
 
 CLUSTERS = Registry("cluster", __name__)
 

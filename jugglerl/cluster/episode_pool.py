@@ -19,8 +19,8 @@ from omegaconf import DictConfig
 
 from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episodes
 from jugglerl.cluster import open_cluster
-from jugglerl.evaluation import EpisodeMetrics
 from jugglerl.policies import Policy
+from jugglerl.policies.episodes import EpisodeMetrics
 from jugglerl_envs import JuggleBatch, JuggleEnv
 
 #: Most episodes run as one batch.

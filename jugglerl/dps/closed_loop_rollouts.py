@@ -22,10 +22,10 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.cluster.episode_pool import EpisodePool, EpisodeTask
-from jugglerl.config import make_juggle_env
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.dps.rollouts import RolloutResults
-from jugglerl.evaluation import EpisodeMetrics
 from jugglerl.policies import Policy
+from jugglerl.policies.episodes import EpisodeMetrics
 
 LIMIT_KEYS = ("max_cup_height", "max_joint_speed", "max_balls_in_cup")
 

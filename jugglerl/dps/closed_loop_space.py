@@ -15,7 +15,7 @@ import gymnasium as gym
 import torch
 from omegaconf import DictConfig
 
-from jugglerl.config import make_juggle_env
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.dps.closed_loop_rollouts import ClosedLoopRollouts
 from jugglerl.policies.feedback import (
     PARAM_NAMES,

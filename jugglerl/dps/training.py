@@ -31,7 +31,6 @@ import torch
 from omegaconf import DictConfig
 from tqdm import tqdm
 
-from jugglerl.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.dps.collector import DPSCollector
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.spaces import SPACES
@@ -40,7 +39,8 @@ from jugglerl.recording.blueprint import SEARCH_CURVES, training_blueprint
 from jugglerl.recording.episode import record_episode
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import DPS, join
-from jugglerl.run_files import METRICS, write_json
+from jugglerl.runs.checkpoints import CHECKPOINT, config_entries, save_checkpoint
+from jugglerl.runs.files import METRICS, write_json
 
 #: What a run may deploy (``algo.deploy``): its best roll-out's θ or the distribution's mean.
 DEPLOYS = ("best", "mean")

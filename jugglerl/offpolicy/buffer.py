@@ -29,7 +29,7 @@ from torchrl.data import (
 )
 
 from jugglerl.batch.collector import TRAJECTORY_KEY
-from jugglerl.run_files import RunFileError, failure
+from jugglerl.runs.files import RunFileError, failure
 
 # TorchRL logs each storage it allocates at INFO, between a run's progress bar and its results
 logging.getLogger("torchrl").setLevel(logging.WARNING)

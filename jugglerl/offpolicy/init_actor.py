@@ -13,7 +13,7 @@ from torch import nn
 
 from jugglerl.networks.actors.correction import Correction
 from jugglerl.policies.actor_file import read_actor_weights
-from jugglerl.policy_files import PolicyFileError
+from jugglerl.runs.policy_files import PolicyFileError
 
 
 def _plain(node) -> dict:

@@ -41,8 +41,7 @@ from jugglerl.batch.batch_stats import BatchStats
 from jugglerl.batch.collector import BatchCollector
 from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.batch.evaluations import Evaluations
-from jugglerl.config import make_juggle_env
-from jugglerl.interrupts import deferred_interrupt
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.networks.actors import ACTION_SIZE, build_actor, recurrent_state
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.checks import check_config
@@ -56,7 +55,8 @@ from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
-from jugglerl.run_files import BUFFERS
+from jugglerl.runs.files import BUFFERS
+from jugglerl.runs.interrupts import deferred_interrupt
 from jugglerl.state.transforms import state_size
 from jugglerl.training import crossed
 

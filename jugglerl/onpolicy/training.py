@@ -43,13 +43,13 @@ from jugglerl.batch.batch_stats import BatchStats
 from jugglerl.batch.collector import BatchCollector
 from jugglerl.batch.env_stack import fit_normalisation_on, make_env
 from jugglerl.batch.evaluations import Evaluations
-from jugglerl.interrupts import deferred_interrupt
 from jugglerl.onpolicy.agent import make_agent, policy_sigma
 from jugglerl.onpolicy.checks import check_config
 from jugglerl.onpolicy.variants import training_variants
 from jugglerl.recording.blueprint import onpolicy_curves
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
+from jugglerl.runs.interrupts import deferred_interrupt
 from jugglerl.state.observation_parts import observed_parts
 from jugglerl.state.transforms import normalised_size, state_size
 from jugglerl.training import crossed

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import yaml
 
-from jugglerl.policy_files import PolicyFileError, names_a_run, read_policy_file
+from jugglerl.runs.policy_files import PolicyFileError, names_a_run, read_policy_file
 
 #: The parts of a run's config an actor policy needs (``ActorPolicy.from_config``).
 CONFIG_KEYS = ("actor", "state", "env")
@@ -64,7 +64,7 @@ def read_actor_weights(spec: str) -> dict:
     """``config``, deployed ``policy`` weights and ``normalisation`` of a shipped actor name, a
     ``kind: actor`` file or an off-policy run (its directory or ``checkpoint.pt``)."""
     if names_a_run(spec):
-        from jugglerl.checkpoints import load_checkpoint
+        from jugglerl.runs.checkpoints import load_checkpoint
 
         state = load_checkpoint(spec)
         if state["deploys"] != "actor":

@@ -21,7 +21,7 @@ from pathlib import Path
 import torch
 
 from jugglerl.policies.actor import DeployedActor
-from jugglerl.run_files import write_atomically
+from jugglerl.runs.files import write_atomically
 
 
 def trace(deployed: DeployedActor) -> torch.jit.ScriptModule:

@@ -52,7 +52,7 @@ import gymnasium as gym
 import numpy as np
 
 from jugglerl.commands import CommandError, ViaPointCommand, command_from_dict
-from jugglerl.policy_files import check_balls, write_policy_file
+from jugglerl.runs.policy_files import check_balls, write_policy_file
 from jugglerl_envs.actions import ctrl_to_action
 
 #: m above the cup at which the falling ball locks the command's phase.

@@ -13,13 +13,13 @@ from jugglerl.policies.actor_file import actor_policy_from_dict, check_gravity
 from jugglerl.policies.command import CommandPolicy
 from jugglerl.policies.feedback import feedback_policy_from_dict
 from jugglerl.policies.throw_catch import throw_catch_policy_from_dict
-from jugglerl.policy_files import (
+from jugglerl.runs.files import METRICS
+from jugglerl.runs.policy_files import (
     PolicyFileError,
     check_policy_named,
     names_a_run,
     read_policy_file,
 )
-from jugglerl.run_files import METRICS
 
 #: Policy file kinds and their readers (``data, source, env -> Policy``).
 FILE_KINDS = {
@@ -58,7 +58,7 @@ def load_named_policy(key: str, spec, env: gym.Env) -> Policy:
 
 def _run_policy(path: Path, env: gym.Env) -> Policy:
     """What a training checkpoint says it deploys (``checkpoint["deploys"]``)."""
-    from jugglerl.checkpoints import load_checkpoint  # torch loads only for checkpoints
+    from jugglerl.runs.checkpoints import load_checkpoint  # torch loads only for checkpoints
 
     state = load_checkpoint(path)
     run_dir = path if path.is_dir() else path.parent

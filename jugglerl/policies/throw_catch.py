@@ -73,7 +73,7 @@ import numpy as np
 from jugglerl.commands import CommandError
 from jugglerl.policies.cup_ik import CupIK
 from jugglerl.policies.flight_fit import FlightFit
-from jugglerl.policy_files import check_balls, write_policy_file
+from jugglerl.runs.policy_files import check_balls, write_policy_file
 from jugglerl_envs.actions import ctrl_to_action
 
 KIND = "throw_catch"

@@ -11,8 +11,8 @@ import mujoco
 import numpy as np
 import rerun as rr
 
-from jugglerl.evaluation import EpisodeMetrics, run_episode
 from jugglerl.policies import Policy
+from jugglerl.policies.episodes import EpisodeMetrics, run_episode
 from jugglerl.recording.geometry import (
     body_paths,
     log_static_scene,

@@ -20,7 +20,7 @@ from rerun.chunk import RrdReader
 from torchrl.record.loggers import Logger
 
 from jugglerl.recording.names import HPARAMS, STEP
-from jugglerl.run_files import RunFileError, failure
+from jugglerl.runs.files import RunFileError, failure
 
 APP_ID = "jugglerl"
 #: The longest a flush waits for the recording's file writer, in seconds.

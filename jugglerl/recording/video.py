@@ -19,7 +19,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from jugglerl.run_files import RunFileError, failure
+from jugglerl.runs.files import RunFileError, failure
 
 #: suffix -> (codec, pixel format); H.264 needs even frame sizes (checked in ``VideoRecorder``).
 FORMATS = {

@@ -21,9 +21,9 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.cluster.episode_pool import EpisodePool, EpisodeTask
-from jugglerl.config import make_juggle_env
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.policies.loading import load_policy
-from jugglerl.run_files import write_atomically
+from jugglerl.runs.files import write_atomically
 
 NOMINAL = "nominal"
 

@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from jugglerl.dps.training import MILESTONES
-from jugglerl.run_files import METRICS
+from jugglerl.runs.files import METRICS
 
 
 def run_metrics(folder: Path) -> list[dict]:

@@ -38,7 +38,7 @@ from torchrl.envs.utils import ExplorationType, set_exploration_type
 
 from jugglerl.batch.env_stack import make_env, normalisation
 from jugglerl.cluster.ray_tasks import connect
-from jugglerl.config import make_juggle_env
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.offpolicy.losses.ddpg import DDPG
 from jugglerl.offpolicy.training import OffPolicyTraining
 

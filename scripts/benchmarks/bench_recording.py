@@ -16,7 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from jugglerl.evaluation import run_episode
+from jugglerl.policies.episodes import run_episode
 from jugglerl.policies.loading import load_policy
 from jugglerl.recording.episode import EpisodeRecorder
 from jugglerl.recording.logger import RerunLogger

@@ -18,6 +18,6 @@ Adding one: a module here registering its class, and a ``configs/algo/NAME.yaml`
 ``trainer: search`` and ``space: NAME``.
 """
 
-from jugglerl.registry import Registry
+from jugglerl_envs.registry import Registry
 
 SPACES = Registry("algo.space", __name__)

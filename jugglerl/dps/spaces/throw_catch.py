@@ -32,7 +32,7 @@ from jugglerl.policies.throw_catch import (
     save_throw_catch_policy,
     throw_catch_from_dict,
 )
-from jugglerl.policy_files import check_policy_named, read_policy_file
+from jugglerl.runs.policy_files import check_policy_named, read_policy_file
 
 #: The scalars after the knots, in θ order; ``lead`` and ``still`` only where the start has them.
 SCALARS = ("catch_height", "settle", "carry", "lead", "still")

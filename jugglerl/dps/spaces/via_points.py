@@ -16,7 +16,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.cluster import is_distributed, open_cluster
 from jugglerl.commands import ViaPointCommand, load_command, save_command
-from jugglerl.config import make_juggle_env
+from jugglerl.config.envs import make_juggle_env
 from jugglerl.dps.cluster_rollouts import ClusterCommandRollouts
 from jugglerl.dps.distribution import SearchDistribution
 from jugglerl.dps.params import (
@@ -28,7 +28,7 @@ from jugglerl.dps.params import (
 from jugglerl.dps.rollouts import CommandRollouts
 from jugglerl.dps.spaces import SPACES
 from jugglerl.policies.command import CommandPolicy
-from jugglerl.policy_files import check_policy_named
+from jugglerl.runs.policy_files import check_policy_named
 from jugglerl_envs.settings import MAX_RESET_NOISE
 from jugglerl_envs.validation import check_number
 

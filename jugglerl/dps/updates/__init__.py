@@ -24,7 +24,7 @@ import torch
 from omegaconf import DictConfig
 
 from jugglerl.dps.distribution import SearchDistribution
-from jugglerl.registry import Registry
+from jugglerl_envs.registry import Registry
 
 UPDATES = Registry("algo.update", __name__)
 

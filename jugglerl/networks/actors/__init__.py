@@ -23,7 +23,7 @@ from torchrl.data import Unbounded
 from torchrl.envs import TensorDictPrimer
 
 from jugglerl.networks.actors.correction import corrected
-from jugglerl.registry import Registry
+from jugglerl_envs.registry import Registry
 from jugglerl_envs.scene import ACTUATED_JOINTS
 
 ACTORS = Registry("actor", __name__)

@@ -8,7 +8,7 @@ only when its ``step(frames)`` is called, and passes the action through unchange
 ``configs/exploration/NAME.yaml``.
 """
 
-from jugglerl.registry import Registry
+from jugglerl_envs.registry import Registry
 
 EXPLORATIONS = Registry("exploration", __name__)
 

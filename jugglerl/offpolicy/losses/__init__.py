@@ -10,6 +10,6 @@ style). Adding one: a module here and a ``configs/algo/NAME.yaml`` (``trainer: o
 ``loss: NAME``, ``defaults: [/offpolicy]``).
 """
 
-from jugglerl.registry import Registry
+from jugglerl_envs.registry import Registry
 
 LOSSES = Registry("algo.loss", __name__)

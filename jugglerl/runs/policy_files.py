@@ -13,7 +13,7 @@ from pathlib import Path
 
 import yaml
 
-from jugglerl.run_files import write_atomically
+from jugglerl.runs.files import write_atomically
 
 SHIPPED_PACKAGE = "jugglerl_envs.assets"
 SHIPPED_FOLDER = "policies"
@@ -98,7 +98,7 @@ def read_policy_file(name_or_path: str | Path) -> tuple[dict, str]:
 
 def write_policy_file(data: dict, path: str | Path) -> Path:
     """Write a policy mapping as YAML (JSON for a ``.json`` path), keys in the given order,
-    atomically (``jugglerl.run_files``: a run's best policy so far is never half written)."""
+    atomically (``jugglerl.runs.files``: a run's best policy so far is never half written)."""
     path = Path(path)
     if path.suffix.lower() == ".json":
         text = json.dumps(data, indent=2)

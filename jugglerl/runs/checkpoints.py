@@ -15,7 +15,7 @@ from pathlib import Path
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from jugglerl.run_files import write_atomically
+from jugglerl.runs.files import write_atomically
 
 CHECKPOINT = "checkpoint.pt"
 
@@ -30,7 +30,7 @@ def config_entries(cfg: DictConfig) -> dict:
 
 def save_checkpoint(state: dict, path: Path) -> None:
     """Write ``state`` atomically: a crash or a full disk mid-write leaves the previous checkpoint
-    intact (``RunFileError`` otherwise, ``jugglerl.run_files``)."""
+    intact (``RunFileError`` otherwise, ``jugglerl.runs.files``)."""
     write_atomically(path, lambda file: torch.save(state, file))
 
 
