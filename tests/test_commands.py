@@ -68,11 +68,22 @@ def test_missing_command_names_the_path_and_the_shipped_ones(tmp_path):
             load_command(path)
     with pytest.raises(PolicyFileError, match="no policy file at .*shipped policies: closed_loop,"):
         load_command("no_such_command")
+    with pytest.raises(PolicyFileError, match=r"\(shelved: closed_loop_gains, .*two_balls_start"):
+        load_command("no_such_command")
     with pytest.raises(CommandError, match="kind='feedback' is not a command"):
         load_command("closed_loop")
     with pytest.raises(PolicyFileError, match="not valid JSON"):
         (tmp_path / "c.json").write_text("{")
         load_command(tmp_path / "c.json")
+
+
+def test_a_shelved_policy_loads_by_name_and_is_not_listed_as_shipped():
+    from jugglerl.runs.policy_files import policy_file, shelved_names, shipped_names
+
+    assert policy_file("closed_loop_gains").parent.name == "superseded"
+    assert policy_file("two_balls_throw_start").parent.name == "starts"
+    assert "earth_expert" in shelved_names() and "earth_expert" not in shipped_names()
+    assert {"expert", "closed_loop", "lstm_centred"} <= set(shipped_names())
 
 
 def test_shorten_hold_moves_the_rest_of_the_command_earlier():

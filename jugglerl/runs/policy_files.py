@@ -3,6 +3,9 @@
 
 Every shipped policy is one file in ``assets/policies/`` (installed as package data of
 ``jugglerl_envs.assets``), named by its stem: ``policy=expert`` is ``assets/policies/expert.yaml``.
+The shelves beside them (``SHELVES``) hold the policies that are not results but stay loadable
+by name: the hand-made starts of searches (``starts/``) and the results later searches replaced
+(``superseded/``).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from jugglerl.runs.files import write_atomically
 
 SHIPPED_PACKAGE = "jugglerl_envs.assets"
 SHIPPED_FOLDER = "policies"
+SHELVES = ("starts", "superseded")
 SUFFIXES = (".yaml", ".yml", ".json")
 
 
@@ -42,6 +46,27 @@ def shipped_names() -> list[str]:
     return sorted(path.stem for path in shipped_folder().glob("*.yaml"))
 
 
+def shelved_names() -> list[str]:
+    """Names of the policies on the shelves (``SHELVES``), loadable by name like the shipped."""
+    folder = shipped_folder()
+    return sorted(path.stem for shelf in SHELVES for path in (folder / shelf).glob("*.yaml"))
+
+
+def named_file(name: str) -> Path:
+    """Where a policy name's file would be: among the shipped ones, else on a shelf that has
+    it."""
+    folder = shipped_folder()
+    for candidate in [folder, *(folder / shelf for shelf in SHELVES)]:
+        if (candidate / f"{name}.yaml").is_file():
+            return candidate / f"{name}.yaml"
+    return folder / f"{name}.yaml"
+
+
+def known_names() -> str:
+    """The shipped names and the shelved ones, for error messages."""
+    return f"{', '.join(shipped_names())} (shelved: {', '.join(shelved_names())})"
+
+
 def policy_file(name_or_path: str | Path) -> Path:
     """The file a shipped name or a path names; ``PolicyFileError`` listing the shipped names if
     there is none."""
@@ -50,13 +75,11 @@ def policy_file(name_or_path: str | Path) -> Path:
         if len(path.parts) > 1 or path.exists():  # a path, not a shipped name
             raise PolicyFileError(
                 f"{path}: not a run directory, a checkpoint (.pt) or a policy file"
-                f" ({', '.join(SUFFIXES)}); shipped policies: {', '.join(shipped_names())}"
+                f" ({', '.join(SUFFIXES)}); shipped policies: {known_names()}"
             )
-        path = shipped_folder() / f"{name_or_path}.yaml"
+        path = named_file(str(name_or_path))
     if not path.is_file():
-        raise PolicyFileError(
-            f"no policy file at {path}; shipped policies: {', '.join(shipped_names())}"
-        )
+        raise PolicyFileError(f"no policy file at {path}; shipped policies: {known_names()}")
     return path
 
 
@@ -66,7 +89,7 @@ def check_policy_named(key: str, spec: str | Path) -> None:
     its checkpoint is loaded, a file's content when it is read: those errors name the file)."""
     if spec is None or not str(spec).strip():
         raise PolicyFileError(
-            f"{key} is empty: give a shipped policy ({', '.join(shipped_names())}), a policy file"
+            f"{key} is empty: give a shipped policy ({known_names()}), a policy file"
             " or a run directory"
         )
     if not names_a_run(spec):
