@@ -19,6 +19,8 @@ from jugglerl.networks.reference import CommandReference
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.exploration import make_exploration
 from jugglerl.offpolicy.exploration.gaussian import CentredGaussianNoise, CommandCentre
+from jugglerl.offpolicy.teacher import TEACHER_ACTION
+from jugglerl.offpolicy.who_acts import WhoActs
 from jugglerl.policies.actor import ActorPolicy
 from jugglerl.state.timestamp import TimestampFeatures, time_features
 from jugglerl.state.transforms import state_size
@@ -162,6 +164,29 @@ def test_expert_gaussian_anneals_towards_the_actor():
     torch.testing.assert_close(actions.std(0), torch.full((3,), 0.01), atol=1e-3, rtol=0)
 
 
+@pytest.mark.parametrize("acts", ["teacher", "student"])
+def test_who_acts_moves_the_envs_with_its_action_and_white_noise(acts):
+    student, teacher = torch.tensor([0.1, -0.2, 0.3]), torch.tensor([0.4, 0.5, -0.6])
+    data = TensorDict(
+        {"action": student.expand(20000, 3).clone(), TEACHER_ACTION: teacher.expand(20000, 3)},
+        batch_size=[20000],
+    )
+    who = WhoActs(acts, noise=0.01)
+    torch.manual_seed(0)
+    with set_exploration_type(ExplorationType.RANDOM):
+        actions = who(data.clone())["action"]
+    acting = teacher if acts == "teacher" else student
+    torch.testing.assert_close(actions.mean(0), acting, atol=3e-4, rtol=0)
+    torch.testing.assert_close(actions.std(0), torch.full((3,), 0.01), atol=3e-4, rtol=0)
+    still = WhoActs(acts, noise=0.0)
+    with set_exploration_type(ExplorationType.RANDOM):
+        assert torch.equal(still(data.clone())["action"][0], acting)  # exactly, without noise
+    with set_exploration_type(ExplorationType.DETERMINISTIC):  # evaluation: the actor acts
+        assert torch.equal(who(data.clone())["action"], data["action"])
+    with pytest.raises(ValueError, match="acts=both must be one of teacher, student"):
+        WhoActs("both", 0.0)
+
+
 @pytest.mark.slow
 def test_exploration_modules_pass_the_action_through_when_deterministic():
     cfg, env, actor = stack()
@@ -194,13 +219,13 @@ def test_ou_noise_is_correlated_in_time_and_its_scale_anneals():
 
 
 def test_unknown_exploration_centre_is_named():
-    cfg = train_config("exploration.centre=middle")
-    with pytest.raises(ValueError, match="centre=middle is not one of timed, average, teacher"):
+    cfg = train_config("algo=ddpg", "exploration.centre=middle")
+    with pytest.raises(ValueError, match="centre=middle is not one of timed, average$"):
         make_exploration(cfg.exploration, Bounded(-1.0, 1.0, shape=(3,)))
 
 
 def test_unknown_exploration_names_the_valid_ones():
-    cfg = train_config()
+    cfg = train_config("algo=ddpg")
     cfg.exploration.name = "pink"
     with pytest.raises(ValueError, match="exploration='pink' is not available; choose one of"):
         make_exploration(cfg.exploration, Bounded(-1.0, 1.0, shape=(3,)))

@@ -53,7 +53,6 @@ def train(cfg, run_dir, state=None) -> tuple[dict, OffPolicyTraining]:
             "algo=ddpg",
             "algo.bc_weight=1",
             "teacher.policy=closed_loop",
-            "exploration.centre=teacher",
         ],
     ],
 )

@@ -45,8 +45,8 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert [s.name for s in (bc, dagger, rl)] == ["bc", "dagger", "rl"]
     assert (bc.start, bc.end, dagger.end, rl.end) == (0, 327680, 368640, 491520)
     assert bc.cfg.algo.loss == dagger.cfg.algo.loss == "bc" and rl.cfg.algo.loss == "ddpg"
-    assert bc.cfg.exploration.centre == "teacher" and bc.cfg.exploration.expert_weight_init == 1
-    assert dagger.cfg.exploration.expert_weight_init == 0 and dagger.cfg.exploration.sigma_init == 0
+    assert (bc.acts, bc.noise, dagger.acts, dagger.noise) == ("teacher", 0.003, "student", 0.0)
+    assert (rl.acts, rl.noise) == ("student", 0.003) and "exploration" not in bc.cfg
     assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0
     assert bc.cfg.optim.trains == dagger.cfg.optim.trains == "base"
     assert rl.cfg.optim.trains == "correction" and rl.cfg.actor.correction.max_correction == 0.002
@@ -77,34 +77,10 @@ def test_plain_train_py_composes_the_quickstarts_lstm_apprentice():
     assert train_config("algo=ddpg").actor.name == "mlp"  # and the other algorithms keep theirs
 
 
-def test_who_acts_and_the_noise_are_the_centred_gaussian_they_stand_for():
-    spelled_out = {
-        0: "{centre: teacher, expert_weight_init: 1.0, expert_weight_end: 1.0,"
-        " sigma_init: 0.003, sigma_end: 0.003}",
-        1: "{centre: teacher, expert_weight_init: 0.0, expert_weight_end: 0.0,"
-        " sigma_init: 0.0, sigma_end: 0.0}",
-    }
-    overrides = [
-        override
-        for index, exploration in spelled_out.items()
-        for override in (
-            f"~algo.stages.{index}.acts",
-            f"~algo.stages.{index}.noise",
-            f"+algo.stages.{index}.exploration={exploration}",
-        )
-    ]
-    shorthand = stages_from_config(train_config("algo=apprentice"))
-    explicit = stages_from_config(train_config("algo=apprentice", *overrides))
-    for short, spelled in zip(shorthand, explicit, strict=True):
-        assert short.cfg.exploration == spelled.cfg.exploration
-    bc, dagger = shorthand
-    assert (bc.cfg.exploration.expert_weight_end, bc.cfg.exploration.sigma_end) == (1.0, 0.003)
-    assert (dagger.cfg.exploration.expert_weight_end, dagger.cfg.exploration.sigma_end) == (0, 0)
-
-
 def test_a_run_without_stages_is_one_stage_of_its_loss():
     (stage,) = stages_from_config(train_config("algo=td3"))
     assert (stage.name, stage.start, stage.end, stage.cfg.algo.loss) == ("td3", 0, 307200, "td3")
+    assert stage.acts is None and stage.cfg.exploration.name == "gaussian"  # the group explores
     assert not stage.actor_frozen(1024) and stage.demo_fraction == 0
 
 
@@ -124,9 +100,10 @@ def test_a_run_without_stages_is_one_stage_of_its_loss():
         ("algo.rl_stage.noise=loud", "algo.stages[2].noise=loud must be a number >= 0"),
         (
             "+algo.rl_stage.exploration.sigma_init=0.01",
-            "algo.stages[2]: acts/noise set exploration ['sigma_init']; give them once",
+            "algo.stages[2]: a stage with acts does not explore (exploration keys given)",
         ),
-        ("exploration=ou", "algo.stages[0]: acts and noise need exploration=gaussian (ou)"),
+        ("teacher.policy=null", "algo.stages[0].acts=teacher needs a teacher.policy"),
+        ("~algo.stages.1.acts", "algo.stages[1].noise is the σ of who acts: it needs algo.stag"),
     ],
 )
 def test_bad_stage_settings_are_named(override, message):

@@ -11,10 +11,11 @@ then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
   also cuts a stage short or leaves the later ones for a resume to reach) |
 | ``loss`` | the ``algo.loss`` the stage updates with (``bc``, ``ddpg``, ``td3``) |
 | ``acts`` | who acts: ``teacher`` (the student watches: behaviour cloning) or ``student`` (the
-  actor acts, a teacher in the loop labels what it visits: DAgger, RL) |
-| ``noise`` | σ of the white noise added to whoever acts (normalised action units) |
-| ``exploration``, ``optim`` | keys of those groups replaced in this stage (a learning rate; any
-  exploration key that ``acts`` and ``noise`` do not set) |
+  actor acts, a teacher in the loop labels what it visits: DAgger, RL), through
+  ``jugglerl.offpolicy.who_acts.WhoActs``; without it the ``exploration`` group's module acts |
+| ``noise`` | with ``acts``: σ of the white noise on whoever acts (normalised action units) |
+| ``exploration``, ``optim`` | keys of those groups replaced in this stage (a learning rate; an
+  exploration key of a stage without ``acts``) |
 | ``bc_weight``, ``bc_weight_end`` | the RL losses' cloning weight, linear over the stage |
 | ``demonstrations`` | the stage's frames are kept as demonstrations too (a buffer of their own) |
 | ``demo_fraction`` | fraction of each sampled batch drawn from the demonstrations |
@@ -43,6 +44,7 @@ from dataclasses import dataclass
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.batch.evaluations import score
+from jugglerl.offpolicy.who_acts import ACTORS
 from jugglerl_envs.validation import check_number
 
 STAGE_KEYS = {
@@ -114,6 +116,10 @@ class Stage:
     #: env arguments the stage's envs are split among (``[{}]``: all nominal)
     variants: tuple[dict, ...] = ({},)
     stop: StopRule | None = None
+    #: who acts (``teacher`` or ``student``, with white noise of σ ``noise``), or ``None``: the
+    #: exploration group's module
+    acts: str | None = None
+    noise: float = 0.0
 
     def bc_weight_at(self, frames: int) -> float:
         """The cloning weight after ``frames`` frames of the run."""
@@ -155,9 +161,9 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage_cfg.algo.loss = spec.get("loss", cfg.algo.loss)
         bc_weight = float(spec.get("bc_weight", cfg.algo.get("bc_weight", 0.0)))
         stage_cfg.algo.bc_weight = bc_weight
-        stage_cfg.exploration = OmegaConf.merge(
-            cfg.exploration, spec.get("exploration", {}), _who_acts(spec, cfg.exploration, where)
-        )
+        acts, noise = _who_acts(spec, cfg, where)
+        if acts is None:
+            stage_cfg.exploration = OmegaConf.merge(cfg.exploration, spec.get("exploration", {}))
         stage_cfg.optim = OmegaConf.merge(cfg.optim, spec.get("optim", {}))
         _check_optim(stage_cfg.optim, spec.get("optim", {}), where)
         stage_cfg.optim.trains = str(spec.get("trains", "base"))
@@ -180,6 +186,8 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
                 warmup_frames=int(spec.get("warmup_frames", 0)),
                 variants=_variants(spec.get("perturbed"), where),
                 stop=StopRule.from_spec(spec.get("stop"), where),
+                acts=acts,
+                noise=noise,
             )
         )
         start = int(end)
@@ -205,10 +213,6 @@ def stopped_early(stages: list[Stage], stops: Mapping[int, int]) -> list[Stage]:
     return stages
 
 
-#: ``acts``: the weight of the teacher's action in the exploration's centred Gaussian
-ACTORS_WEIGHT = {"teacher": 1.0, "student": 0.0}
-
-
 def _check_optim(optim: DictConfig, stage_optim: Mapping, where: str) -> None:
     """Positive learning rates, a whole number of updates per batch (0: the stage only
     collects); an error names the stage's key where the stage sets it."""
@@ -222,28 +226,25 @@ def _check_optim(optim: DictConfig, stage_optim: Mapping, where: str) -> None:
     check_number(name("updates_per_batch"), optim.get("updates_per_batch"), 0, integer=True)
 
 
-def _who_acts(spec: Mapping, exploration: DictConfig, where: str) -> dict:
-    """The exploration keys that a stage's ``acts`` and ``noise`` stand for (``gaussian``
-    centred on the teacher's action: its weight 1 when the teacher acts, 0 when the student
-    does; σ constant over the stage)."""
-    keys: dict = {}
-    if ("acts" in spec or "noise" in spec) and exploration.name != "gaussian":
-        raise ValueError(f"{where}: acts and noise need exploration=gaussian ({exploration.name})")
-    if "acts" in spec:
-        acts = spec["acts"]
-        if acts not in ACTORS_WEIGHT:
-            raise ValueError(f"{where}.acts={acts} must be one of {', '.join(ACTORS_WEIGHT)}")
-        weight = ACTORS_WEIGHT[acts]
-        keys.update(centre="teacher", expert_weight_init=weight, expert_weight_end=weight)
-    if "noise" in spec:
-        noise = spec["noise"]
-        if isinstance(noise, bool) or not isinstance(noise, (int, float)) or noise < 0:
-            raise ValueError(f"{where}.noise={noise} must be a number >= 0 (σ)")
-        keys.update(sigma_init=float(noise), sigma_end=float(noise))
-    overlap = sorted(set(keys) & set(spec.get("exploration") or {}))
-    if overlap:
-        raise ValueError(f"{where}: acts/noise set exploration {overlap}; give them once")
-    return keys
+def _who_acts(spec: Mapping, cfg: DictConfig, where: str) -> tuple[str | None, float]:
+    """A stage's ``acts`` and ``noise`` (``None``, 0 without ``acts``: the exploration group
+    acts), checked: a teacher to act, no exploration keys beside them."""
+    acts, noise = spec.get("acts"), spec.get("noise", 0.0)
+    if acts is None:
+        if "noise" in spec:
+            raise ValueError(f"{where}.noise is the σ of who acts: it needs {where}.acts")
+        if cfg.get("exploration") is None:
+            raise ValueError(f"{where}: without acts the stage needs an exploration group")
+        return None, 0.0
+    if acts not in ACTORS:
+        raise ValueError(f"{where}.acts={acts} must be one of {', '.join(ACTORS)}")
+    if acts == "teacher" and cfg.teacher.policy is None:
+        raise ValueError(f"{where}.acts=teacher needs a teacher.policy")
+    if isinstance(noise, bool) or not isinstance(noise, (int, float)) or noise < 0:
+        raise ValueError(f"{where}.noise={noise} must be a number >= 0 (σ)")
+    if spec.get("exploration"):
+        raise ValueError(f"{where}: a stage with acts does not explore (exploration keys given)")
+    return str(acts), float(noise)
 
 
 def _variants(perturbed, where: str) -> tuple[dict, ...]:

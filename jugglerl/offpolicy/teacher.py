@@ -5,7 +5,7 @@ policy with per-episode state, stepped on numpy observations. The module runs on
 of the batch on the env stack's raw ``observation`` and ``time`` (kept beside the networks'
 ``state``, see ``jugglerl.batch.env_stack``), resets a copy when its env starts an episode
 (``is_init``), and writes the actions under ``("teacher", "action")``: into the replay buffer with
-each transition (the labels of behaviour cloning), and for exploration centred on it.
+each transition (the labels of behaviour cloning), and for ``WhoActs`` when the teacher acts.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from tensordict.nn import TensorDictModuleBase
 
 from jugglerl.policies import Policy
 
-#: Where the teacher writes its action for each transition (the cloning loss and the
-#: teacher-centred exploration read it).
+#: Where the teacher writes its action for each transition (the cloning loss reads it, and
+#: ``jugglerl.offpolicy.who_acts.WhoActs`` when the teacher acts).
 TEACHER_ACTION = ("teacher", "action")
 
 

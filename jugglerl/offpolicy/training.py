@@ -18,8 +18,9 @@ is the default) and a run directory, where it writes
 - ``metrics.json`` at the end: the final evaluation over ``eval.seeds`` full-length episodes, the
   periodic evaluations and the per-batch history.
 
-With ``teacher.policy`` set, a teacher acts in the loop beside the actor (``teacher``): its actions
-land in the replay buffer for behaviour cloning and centre exploration on it; a stage with
+With ``teacher.policy`` set, a teacher runs in the loop beside the actor (``teacher``): its actions
+land in the replay buffer for behaviour cloning, and a stage's ``acts`` says whether they or the
+actor's move the envs (``jugglerl.offpolicy.who_acts``); a stage with
 ``demonstrations`` also keeps its frames apart, for the later stages' ``demo_fraction``. Metrics
 go to rerun under ``train/`` (per batch) and ``eval/`` (each evaluation) on the ``step`` timeline
 (frames).
@@ -52,6 +53,7 @@ from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.resume import resume_notes
 from jugglerl.offpolicy.stages import Stage, stages_from_config, stopped_early
 from jugglerl.offpolicy.teacher import TeacherModule, teacher_period
+from jugglerl.offpolicy.who_acts import WhoActs
 from jugglerl.policies.loading import load_named_policy
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import TRAIN, join
@@ -117,12 +119,16 @@ class OffPolicyTraining(ActorTraining):
             self.load_state_dict(state)
 
     def _enter(self, stage: Stage) -> None:
-        """Build ``stage``'s loss (on the same actor) and exploration, and the acting policy."""
+        """Build ``stage``'s loss (on the same actor), who acts (``acts``, else the exploration
+        group's module) and the acting policy."""
         self.stage = stage
         self.update = LOSSES.get(stage.cfg.algo.loss)(
             self.actor, state_size(self.cfg.state), self.env.action_spec, stage.cfg, self.recurrent
         )
-        self.noise = make_exploration(stage.cfg.exploration, self.env.action_spec)
+        if stage.acts is not None:
+            self.noise = WhoActs(stage.acts, stage.noise)
+        else:
+            self.noise = make_exploration(stage.cfg.exploration, self.env.action_spec)
         self.policy = TensorDictSequential(*self.teacher, self.actor, self.noise)
 
     # --- the loop -------------------------------------------------------------------------
@@ -242,9 +248,11 @@ class OffPolicyTraining(ActorTraining):
         return self.stages[-1].end  # collector.total_frames less what stopped stages saved
 
     def label(self) -> str:
+        exploration = self.cfg.get("exploration")
+        explores = f" {exploration.name} exploration," if exploration is not None else ""
         return (
-            f"{self.cfg.algo.name.upper()} ({self.cfg.actor.name} actor,"
-            f" {self.cfg.exploration.name} exploration, reward {self.cfg.env.reward})"
+            f"{self.cfg.algo.name.upper()} ({self.cfg.actor.name} actor,{explores}"
+            f" reward {self.cfg.env.reward})"
         )
 
     # --- evaluation -----------------------------------------------------------------------

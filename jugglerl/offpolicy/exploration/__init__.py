@@ -1,11 +1,11 @@
 """Exploration: modules that turn the actor's ``action`` into an exploratory one.
 
 Each module registers a builder in ``EXPLORATIONS`` (chosen by ``exploration.name``):
-``build(exploration_cfg, action_spec) -> module``. A module reads the tensordict after the actor
-(and after a teacher in the loop, whose action it may centre on), rewrites ``action``, anneals
-only when its ``step(frames)`` is called, and passes the action through unchanged outside
-``ExplorationType.RANDOM`` (evaluation). Adding one: a module here and a
-``configs/exploration/NAME.yaml``.
+``build(exploration_cfg, action_spec) -> module``. A module reads the tensordict after the actor,
+rewrites ``action``, anneals only when its ``step(frames)`` is called, and passes the action
+through unchanged outside ``ExplorationType.RANDOM`` (evaluation). A stage whose teacher or
+student acts (``acts``) uses ``jugglerl.offpolicy.who_acts.WhoActs`` instead. Adding one: a
+module here and a ``configs/exploration/NAME.yaml``.
 """
 
 from jugglerl_envs.registry import Registry

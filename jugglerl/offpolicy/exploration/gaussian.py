@@ -1,15 +1,13 @@
-"""``gaussian``: a Gaussian around a centre: the expert command, or a teacher acting in the loop.
+"""``gaussian``: a Gaussian around a centre, the expert command (the paper's exploration).
 
 Action ``a + w (c - a) + σ ε``, clipped to [-1, 1], with ``a`` the actor's action, ``ε ~ N(0, I)``
 and the centre ``c`` chosen by ``exploration.centre``:
 
 - ``timed``: the setpoint of the command ``exploration.command`` at the episode time in its cycle;
 - ``average``: that command's average setpoint over a cycle (the paper's choice: noise centred
-  on the hand-made expert's average command beat OU noise for them);
-- ``teacher``: the action a teacher policy wrote in the loop (``("teacher", "action")``, see
-  ``jugglerl.offpolicy.teacher``).
+  on the hand-made expert's average command beat OU noise for them).
 
-With the centre weight ``w = 1`` actions are drawn around the centre; as ``w`` anneals to
+With the expert's weight ``w = 1`` actions are drawn around the centre; as ``w`` anneals to
 ``expert_weight_end`` the actor takes over. ``w`` and ``σ`` move linearly from their initial to
 their final values over ``annealing_frames`` frames counted by ``step``.
 """
@@ -25,7 +23,6 @@ from torchrl.envs.utils import ExplorationType, exploration_type
 from jugglerl.commands import ViaPointCommand, load_command
 from jugglerl.networks.reference import CommandReference
 from jugglerl.offpolicy.exploration import EXPLORATIONS
-from jugglerl.offpolicy.teacher import TEACHER_ACTION
 from jugglerl_envs.actions import ctrl_to_action
 
 #: Samples over one cycle that define a command's average action.
@@ -53,15 +50,6 @@ class CommandCentre:
         return self.reference(time)
 
 
-class TeacherCentre:
-    """The teacher's action, written in the loop before the actor runs."""
-
-    in_keys = [TEACHER_ACTION]
-
-    def __call__(self, tensordict: TensorDictBase) -> torch.Tensor:
-        return tensordict.get(TEACHER_ACTION)
-
-
 def _interpolate(start: float, end: float, progress: float) -> float:
     return start + (end - start) * progress
 
@@ -71,7 +59,7 @@ class CentredGaussianNoise(TensorDictModuleBase):
 
     def __init__(
         self,
-        centre: CommandCentre | TeacherCentre,
+        centre: CommandCentre,
         sigma_init: float,
         sigma_end: float,
         expert_weight_init: float,
@@ -125,7 +113,7 @@ class CentredGaussianNoise(TensorDictModuleBase):
         return tensordict.set("action", noisy.clamp(-1.0, 1.0))
 
 
-CENTRES = ("timed", "average", "teacher")
+CENTRES = ("timed", "average")
 
 
 @EXPLORATIONS.register("gaussian")
@@ -133,10 +121,7 @@ def centred_gaussian(exploration_cfg, action_spec) -> CentredGaussianNoise:
     mode = exploration_cfg.centre
     if mode not in CENTRES:
         raise ValueError(f"exploration.centre={mode} is not one of {', '.join(CENTRES)}")
-    if mode == "teacher":
-        centre = TeacherCentre()
-    else:
-        centre = CommandCentre(load_command(exploration_cfg.command), average=mode == "average")
+    centre = CommandCentre(load_command(exploration_cfg.command), average=mode == "average")
     return CentredGaussianNoise(
         centre,
         sigma_init=exploration_cfg.sigma_init,
