@@ -8,6 +8,7 @@ import pytest
 import torch
 import yaml
 from cli import env_preset, run_script, run_train, train_config
+from omegaconf import OmegaConf
 
 from jugglerl.commands import CommandError, load_command
 from jugglerl.config.envs import make_juggle_env
@@ -25,7 +26,7 @@ from jugglerl.policies.feedback import (
     steer,
 )
 from jugglerl.policies.loading import load_policy
-from jugglerl_envs import JuggleEnv
+from jugglerl_envs import JuggleBatch, JuggleEnv
 
 OPEN_LOOP = FeedbackGains(0.5, 0.0, 0.0, 1.0, 0.0, 0.0)
 
@@ -252,15 +253,25 @@ def test_every_shipped_policy_keeps_its_throws_honest():
     no two balls share the cup (they pass through each other: two would juggle as one); each
     one-ball juggler throws at least the paper's 39 (two balls: test_balls.py,
     test_throw_catch_balls.py)."""
-    from jugglerl.runs.policy_files import read_policy_file, shelved_names, shipped_names
+    from jugglerl.batch.episodes import RowPolicies, per_env_arguments, run_episodes
+    from jugglerl.runs.policy_files import read_policy_file, shipped_names
 
-    for name in shipped_names() + shelved_names():
+    groups: dict[tuple[str, int], list[str]] = {}  # one batch per env preset and number of balls
+    for name in shipped_names():
         data = read_policy_file(name)[0]
-        balls = data.get("balls", 1)
-        env = env_preset(data.get("env", "paper"), balls=balls)
-        metrics = run_episode(env, load_policy(name, env), seed=0)
-        assert metrics.max_cup_height <= 0.76 and metrics.max_balls_in_cup <= 1, name
-        assert balls > 1 or metrics.throws >= 39, name
+        groups.setdefault((data.get("env", "paper"), data.get("balls", 1)), []).append(name)
+    for (preset, balls), names in groups.items():
+        env = env_preset(preset, balls=balls)
+        arguments = OmegaConf.to_container(train_config(f"env={preset}").env) | {"balls": balls}
+        batch = JuggleBatch(
+            len(names), autoreset=False, **per_env_arguments([arguments] * len(names))
+        )
+        policies = RowPolicies([load_policy(name, env) for name in names])
+        episodes = run_episodes(batch, policies, [0] * len(names))
+        batch.close()
+        for name, metrics in zip(names, episodes, strict=True):
+            assert metrics.max_cup_height <= 0.76 and metrics.max_balls_in_cup <= 1, name
+            assert balls > 1 or metrics.throws >= 39, name
 
 
 @pytest.mark.slow

@@ -22,8 +22,8 @@ FAILED_WRITE = re.compile(
         ("evaluate.py", ["policy=closed_loop", "duration=20"], 40_000, "episode.rrd"),
         (
             "evaluate.py",
-            ["policy=closed_loop", "duration=20", "video=true", "logger.scene_fps=1"],
-            100_000,
+            ["policy=closed_loop", "duration=4", "video=true", "logger.scene_fps=1"],
+            30_000,
             "episode.mp4",
         ),
         (

@@ -29,6 +29,7 @@ SHORT_APPRENTICE = (
     "algo.stages.1.until=1024",
     "algo.stages.0.optim.updates_per_batch=4",
     "algo.stages.1.optim.updates_per_batch=4",
+    "algo.rl_stage.optim.updates_per_batch=4",
     "algo.stop_cloning=null",
     "state.norm_frames=200",
     "env.duration=4",

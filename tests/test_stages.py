@@ -31,7 +31,10 @@ STAGED = [
     "algo.rl_stage.warmup_frames=128",
     "algo.rl_stage.demo_fraction=0.25",
     "algo.rl_stage.bc_weight=1.0",
+    "algo.stages.0.optim.updates_per_batch=8",
+    "algo.rl_stage.optim.updates_per_batch=8",
     "eval.every_frames=0",
+    "eval.perturbed_duration=2",
 ]
 
 
@@ -290,6 +293,7 @@ EARTH_STAGED = [
     "checkpoint_every_frames=128",
     "algo.stages.0.until=128",
     "eval.every_frames=0",
+    "eval.perturbed_duration=2",
 ]
 
 
