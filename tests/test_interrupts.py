@@ -69,3 +69,22 @@ def test_where_ctrl_c_is_ignored_it_stays_ignored():
         assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def test_a_ctrl_c_while_a_checkpoint_is_written_waits_for_the_file(tmp_path):
+    """A Ctrl-C landing in a periodic checkpoint (syncing the replay buffers through tensordict,
+    which an interrupt turns into another error) is raised once the file is whole."""
+    import torch
+
+    from jugglerl.batch.actor_training import ActorTraining
+
+    class Saving(ActorTraining):
+        run_dir, seconds = tmp_path, {}
+
+        def state_dict(self) -> dict:
+            ctrl_c()  # the press lands while the state is gathered
+            return {"weights": torch.ones(3)}
+
+    with pytest.raises(KeyboardInterrupt), stop_on_interrupt():
+        Saving().save()
+    assert torch.equal(torch.load(tmp_path / "checkpoint.pt")["weights"], torch.ones(3))

@@ -29,6 +29,7 @@ from jugglerl.recording.blueprint import training_blueprint
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.runs.checkpoints import CHECKPOINT, config_entries, save_checkpoint
 from jugglerl.runs.files import METRICS, write_json
+from jugglerl.runs.interrupts import deferred_interrupt
 
 
 class ActorTraining:
@@ -188,7 +189,10 @@ class ActorTraining:
         self.recording_id = state["recording_id"]
 
     def save(self) -> None:
-        with self.timed("checkpoint"):
+        """Write the checkpoint, a Ctrl-C during it held until it is written (``state_dict``
+        syncs the memory-mapped replay buffers through tensordict, which an interrupt inside
+        turns into another error: ``jugglerl.runs.interrupts``)."""
+        with deferred_interrupt(), self.timed("checkpoint"):
             save_checkpoint(self.state_dict(), self.run_dir / CHECKPOINT)
 
     def close(self) -> None:

@@ -12,7 +12,9 @@ manager, and when the interrupt lands inside it, leaving the context raises ``Ru
 Converting a tensordict to boolean value is not permitted`` in its place (about one Ctrl-C in
 40, sent at random moments of a short DDPG run). The trainer then never sees the Ctrl-C, writes
 no checkpoint and the user gets a traceback. Holding the interrupt until the updates of a batch
-are done keeps Ctrl-C a clean stop, at the cost of waiting for them.
+are done keeps Ctrl-C a clean stop, at the cost of waiting for them. A checkpoint is held
+likewise: syncing the memory-mapped replay buffers (TorchRL's ``dumps``) unlocks a tensordict in
+a context that fails the same way.
 """
 
 from __future__ import annotations
