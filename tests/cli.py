@@ -158,7 +158,12 @@ def interrupt_train(run_dir: Path, *overrides: str, presses: int = 1) -> tuple[i
     for press in range(presses):
         time.sleep(0.02 * bool(press))
         process.send_signal(signal.SIGINT)
-    _, stderr = process.communicate(timeout=60)
+    try:
+        _, stderr = process.communicate(timeout=60)
+    except subprocess.TimeoutExpired:  # a run that ignored the Ctrl-C must not outlive the test
+        process.kill()
+        process.communicate()
+        raise
     return process.returncode, stderr
 
 

@@ -85,6 +85,9 @@ def test_a_ctrl_c_while_a_checkpoint_is_written_waits_for_the_file(tmp_path):
             ctrl_c()  # the press lands while the state is gathered
             return {"weights": torch.ones(3)}
 
-    with pytest.raises(KeyboardInterrupt), stop_on_interrupt():
-        Saving().save()
+    try:
+        with pytest.raises(KeyboardInterrupt), stop_on_interrupt():
+            Saving().save()
+    finally:  # the run's first Ctrl-C left SIGINT ignored, as a stopping run needs
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     assert torch.equal(torch.load(tmp_path / "checkpoint.pt")["weights"], torch.ones(3))
