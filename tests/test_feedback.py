@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 import yaml
-from cli import env_preset, run_script, run_train, train_config
+from cli import run_script, run_train, train_config
 from omegaconf import OmegaConf
 
 from jugglerl.commands import CommandError, load_command
@@ -261,8 +261,9 @@ def test_every_shipped_policy_keeps_its_throws_honest():
         data = read_policy_file(name)[0]
         groups.setdefault((data.get("env", "paper"), data.get("balls", 1)), []).append(name)
     for (preset, balls), names in groups.items():
-        env = env_preset(preset, balls=balls)
-        arguments = OmegaConf.to_container(train_config(f"env={preset}").env) | {"balls": balls}
+        env_cfg = train_config(f"env={preset}").env
+        env = make_juggle_env(env_cfg, balls=balls)
+        arguments = OmegaConf.to_container(env_cfg) | {"balls": balls}
         batch = JuggleBatch(
             len(names), autoreset=False, **per_env_arguments([arguments] * len(names))
         )

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.batch.evaluations import score
-from jugglerl.offpolicy.who_acts import ACTORS
+from jugglerl.offpolicy.who_acts import check_who_acts
 from jugglerl_envs.validation import check_number
 
 STAGE_KEYS = {
@@ -236,12 +236,12 @@ def _who_acts(spec: Mapping, cfg: DictConfig, where: str) -> tuple[str | None, f
         if cfg.get("exploration") is None:
             raise ValueError(f"{where}: without acts the stage needs an exploration group")
         return None, 0.0
-    if acts not in ACTORS:
-        raise ValueError(f"{where}.acts={acts} must be one of {', '.join(ACTORS)}")
+    try:
+        check_who_acts(acts, noise)
+    except ValueError as error:
+        raise ValueError(f"{where}.{error}") from None
     if acts == "teacher" and cfg.teacher.policy is None:
         raise ValueError(f"{where}.acts=teacher needs a teacher.policy")
-    if isinstance(noise, bool) or not isinstance(noise, (int, float)) or noise < 0:
-        raise ValueError(f"{where}.noise={noise} must be a number >= 0 (σ)")
     if spec.get("exploration"):
         raise ValueError(f"{where}: a stage with acts does not explore (exploration keys given)")
     return str(acts), float(noise)

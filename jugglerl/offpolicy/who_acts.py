@@ -22,14 +22,21 @@ from jugglerl.offpolicy.teacher import TEACHER_ACTION
 ACTORS = ("teacher", "student")
 
 
+def check_who_acts(acts, noise) -> None:
+    """``ValueError`` naming ``acts`` or ``noise`` (σ) when it is not one ``WhoActs`` takes."""
+    if acts not in ACTORS:
+        raise ValueError(f"acts={acts} must be one of {', '.join(ACTORS)}")
+    if isinstance(noise, bool) or not isinstance(noise, (int, float)) or noise < 0:
+        raise ValueError(f"noise={noise} must be a number >= 0 (σ)")
+
+
 class WhoActs(TensorDictModuleBase):
     """The action of whoever ``acts`` (``teacher`` or ``student``), with white noise of σ
     ``noise`` (module docstring)."""
 
     def __init__(self, acts: str, noise: float):
         super().__init__()
-        if acts not in ACTORS:
-            raise ValueError(f"acts={acts} must be one of {', '.join(ACTORS)}")
+        check_who_acts(acts, noise)
         self.acts = acts
         self.noise = float(noise)
         self.in_keys = ["action", *([TEACHER_ACTION] if acts == "teacher" else [])]
