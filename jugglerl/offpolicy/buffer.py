@@ -35,6 +35,28 @@ from jugglerl.runs.files import RunFileError, failure
 logging.getLogger("torchrl").setLevel(logging.WARNING)
 
 
+class MemmapStorage(LazyMemmapStorage):
+    """TorchRL's memory-mapped storage, read through plain tensor views of its maps.
+
+    Indexing tensordict's ``MemoryMappedTensor`` does Python work per key and call (it keeps the
+    file name and index for pickling): with the 40 keys of a transition that was a third of the
+    time of sampling a batch. The views share the maps' memory, so they read what the storage
+    writes; saving and reopening still go through the maps."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._views = self._views_of = None
+
+    def get(self, index):
+        if not self.initialized:
+            return super().get(index)
+        if self._views_of is not self._storage:  # built, or reopened from the files
+            self._views = self._storage.apply(lambda tensor: tensor.as_subclass(torch.Tensor))
+            self._views_of = self._storage
+        views = self._views if self._is_full else self._views[: self._len_along_dim0]
+        return views[index]
+
+
 class ReplayBuffer:
     """``size`` frames; ``sample()`` gives ``batch_size`` transitions, shaped ``[batch_size]``,
     or with ``slice_len`` ``[batch_size // slice_len, slice_len]`` consecutive steps.
@@ -67,13 +89,18 @@ class ReplayBuffer:
         sampler = (
             RandomSampler()
             if slice_len is None
-            else SliceSampler(slice_len=slice_len, traj_key=TRAJECTORY_KEY, strict_length=True)
+            else SliceSampler(
+                slice_len=slice_len,
+                traj_key=TRAJECTORY_KEY,
+                strict_length=True,
+                cache_values=True,  # the trajectories' bounds, found again after each extend
+            )
         )
         self.folder = folder
         self._storage = (
             LazyTensorStorage(size)
             if folder is None
-            else LazyMemmapStorage(size, scratch_dir=folder / "storage", existsok=True)
+            else MemmapStorage(size, scratch_dir=folder / "storage", existsok=True)
         )
         self._writer = RoundRobinWriter()
         self._buffer = TensorDictReplayBuffer(
