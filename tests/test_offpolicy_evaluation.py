@@ -1,6 +1,9 @@
 """The periodic evaluation's perturbed conditions (``eval.perturbed``) and the score that
 ``eval.keep_best`` ranks."""
 
+import re
+
+import numpy as np
 import pytest
 from cli import train_config
 
@@ -43,11 +46,11 @@ def test_perturbed_conditions_run_their_own_episodes_and_enter_the_score(tmp_pat
     assert score(record) == pytest.approx(expected)
 
 
-def test_a_condition_with_its_own_duration_runs_episodes_that_long(tmp_path):
+def test_a_condition_with_its_own_duration_and_seeds_runs_that_many_episodes_that_long(tmp_path):
     cfg = train_config(
         "~eval.perturbed",
         "+eval.perturbed.short={action_noise:0.05}",
-        "+eval.perturbed.long={action_noise:0.05,duration:9}",
+        "+eval.perturbed.long={action_noise:0.05,duration:9,seeds:2}",
         "eval.seeds=1",
         "eval.catch_time=1",
         "eval.record=false",
@@ -59,9 +62,34 @@ def test_a_condition_with_its_own_duration_runs_episodes_that_long(tmp_path):
         record = Evaluations(cfg).evaluate(expert, 0, logger, 12.0)
 
     long_env = make_juggle_env(cfg.env, duration=9.0, action_noise=0.05)
-    by_hand = summarise_episodes([run_episode(long_env, expert, seed=1000)], 1.0)
-    assert record["perturbed"]["long"] == {"duration": 9.0, **by_hand}
-    assert record["perturbed"]["short"]["duration"] == 3.0
+    by_hand = [run_episode(long_env, expert, seed=seed) for seed in (1000, 1001)]
+    assert record["perturbed"]["long"] == {"duration": 9.0, **summarise_episodes(by_hand, 1.0)}
+    assert by_hand[0] != by_hand[1]  # two starts, two episodes
+    short_env = make_juggle_env(cfg.env, duration=3.0, action_noise=0.05)
+    by_hand = summarise_episodes([run_episode(short_env, expert, seed=1000)], 1.0)
+    assert record["perturbed"]["short"] == {"duration": 3.0, **by_hand}  # eval.perturbed_seeds
+
+
+def test_the_final_evaluation_repeats_the_kept_best_instead_of_running_it_again(tmp_path):
+    cfg = train_config(
+        "~eval.perturbed",
+        "+eval.perturbed.shaky={action_noise:0.05}",
+        "eval.seeds=1",
+        "eval.catch_time=1",
+        "eval.perturbed_duration=3",
+        "eval.keep_best=true",
+    )
+    expert = load_policy("expert", make_juggle_env(cfg.env))
+    evaluations = Evaluations(cfg)
+    with RerunLogger.from_config(cfg.logger, tmp_path) as logger:
+        kept = evaluations.evaluate(expert, 10, logger, 6.0)
+        evaluations.keep_if_best(kept, _Weights(10))
+        evaluations.keep_if_best(evaluations.evaluate(_Idle(), 20, logger, 6.0), _Weights(20))
+        assert evaluations.best["frames"] == 10  # the idle actor drops the ball
+        final = evaluations.evaluate(_Unplayable(), 30, logger, 6.0, final=True)
+        assert final == {**kept, "frames": 30} and evaluations.records[-1] is final
+        longer = evaluations.evaluate(expert, 30, logger, 9.0, final=True)  # other episodes
+    assert longer["duration"] == 9.0 and longer["mean_throws"] > kept["mean_throws"]
 
 
 def test_keep_best_prefers_the_actor_that_also_juggles_perturbed(tmp_path):
@@ -95,6 +123,10 @@ def test_a_perturbed_condition_the_env_does_not_know_is_refused_before_training(
     cfg = train_config("+eval.perturbed.windy={gust:1.0}")
     with pytest.raises(ValueError, match="eval.perturbed.windy: env config: .*gust"):
         check_config(cfg)
+    cfg = train_config("~eval.perturbed", "+eval.perturbed.noisy={action_noise:0.003,seeds:0}")
+    message = "eval.perturbed.noisy.seeds=0 is out of range: expected an integer in [1"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        check_config(cfg)
 
 
 def _summary(throws: float, caught: bool = True) -> dict:
@@ -115,3 +147,22 @@ class _Weights:
 
     def state_dict(self) -> dict:
         return {"tag": self.tag}
+
+
+class _Idle:
+    """A batch policy that holds the arm still: it drops the ball."""
+
+    acts_on_batches = True
+
+    def reset(self) -> None:
+        pass
+
+    def act(self, observations, times, running):
+        return np.zeros((len(observations), 3))
+
+
+class _Unplayable(_Idle):
+    """A batch policy that must not be asked to act."""
+
+    def act(self, observations, times, running):
+        raise AssertionError("the final evaluation ran episodes it had already run")

@@ -3,8 +3,9 @@
 ``Evaluations`` runs ``eval.seeds`` deterministic episodes of an actor from env seeds
 ``0..eval.seeds-1`` (the first recorded under ``eval/<frames>`` with ``eval.record``: ``true`` at
 every evaluation, ``final`` at the run's last), and with ``eval.perturbed`` (name: env arguments)
-``eval.perturbed_seeds`` episodes of ``eval.perturbed_duration`` s (or the condition's own
-``duration``) under each of those conditions, from env seeds ``eval.perturbed_first_seed`` on: away
+``eval.perturbed_seeds`` episodes (or the condition's own ``seeds``) of ``eval.perturbed_duration``
+s (or the condition's own ``duration``) under each of those conditions, from env seeds
+``eval.perturbed_first_seed`` on: away
 from the seeds ``scripts/robustness.py`` measures on, so that a run is not selected on its
 benchmark. All the episodes, the recorded one too, run as one ``JuggleBatch``, the actor acting
 on every env in one forward pass per step. It keeps every evaluation's record, and with
@@ -27,12 +28,13 @@ from omegaconf import DictConfig, OmegaConf
 from jugglerl.batch.episodes import batch_policy, per_env_arguments, run_episodes
 from jugglerl.config.envs import make_juggle_env
 from jugglerl.policies.actor import ActorPolicy
-from jugglerl.policies.episodes import EpisodeMetrics, summarise_episodes
+from jugglerl.policies.episodes import SUMMARY_KEYS, EpisodeMetrics, summarise_episodes
 from jugglerl.recording.blueprint import offpolicy_curves, training_blueprint
 from jugglerl.recording.episode import BatchEnvRecorder
 from jugglerl.recording.logger import RerunLogger
 from jugglerl.recording.names import EVAL, join
 from jugglerl_envs import JuggleBatch
+from jugglerl_envs.validation import check_number
 
 
 class Evaluations:
@@ -61,13 +63,21 @@ class Evaluations:
     ):
         """Deterministic episodes of ``policy`` of ``duration`` s, and the perturbed ones;
         returns their record. ``final``: the run's last evaluation, recorded with
-        ``eval.record=final`` too."""
+        ``eval.record=final`` too; it repeats the record of the kept best (``policy``'s weights)
+        when that evaluation ran the same episodes, instead of running them again."""
+        if final and (kept := self._kept_record(duration)) is not None:
+            record = {**copy.deepcopy(kept), "frames": frames}
+            if self.cfg.eval.record is True:  # the episode was recorded at that evaluation
+                root = join(EVAL, f"{kept['frames']:08d}")
+                logger.send_blueprint(training_blueprint(self.curves, root, self.cfg.env.threshold))
+            return self._keep(record, logger)
         check = self.cfg.eval
         plan = [(None, {"duration": duration}, seed) for seed in range(check.seeds)]
         first = check.perturbed_first_seed
-        for name, overrides in self.conditions.items():
-            overrides = {"duration": check.perturbed_duration, **overrides}
-            plan += [(name, overrides, first + k) for k in range(check.perturbed_seeds)]
+        for name, condition in self.conditions.items():
+            overrides = {"duration": check.perturbed_duration, **env_arguments(condition)}
+            seeds = condition.get("seeds", check.perturbed_seeds)
+            plan += [(name, overrides, first + k) for k in range(seeds)]
         root = None
         if check.record is True or (final and check.record == "final"):  # into the recording
             root = join(EVAL, f"{frames:08d}")
@@ -78,7 +88,6 @@ class Evaluations:
         summary = summarise_episodes(nominal, check.catch_time)
         record = {"frames": frames, "duration": duration, **summary}
         record["episodes"] = [episode.to_dict() for episode in nominal]
-        metrics = {join(EVAL, key): value for key, value in summary.items()}
         if self.conditions:
             record["perturbed"] = {}
             for name, overrides in self.conditions.items():
@@ -86,10 +95,31 @@ class Evaluations:
                 seconds = float(overrides.get("duration", check.perturbed_duration))
                 perturbed = {"duration": seconds, **summarise_episodes(runs, check.catch_time)}
                 record["perturbed"][name] = perturbed
-                metrics |= {join(EVAL, name, key): perturbed[key] for key in summary}
+        return self._keep(record, logger)
+
+    def _keep(self, record: dict, logger: RerunLogger) -> dict:
+        """Append ``record`` to ``records`` and log its summaries at its frames."""
+        metrics = {join(EVAL, key): record[key] for key in SUMMARY_KEYS}
+        for name, perturbed in record.get("perturbed", {}).items():
+            metrics |= {join(EVAL, name, key): perturbed[key] for key in SUMMARY_KEYS}
         self.records.append(record)
-        logger.log_metrics(metrics, frames)
+        logger.log_metrics(metrics, record["frames"])
         return record
+
+    def _kept_record(self, duration: float) -> dict | None:
+        """The kept best's record if it ran the final evaluation's episodes (``duration`` s
+        from the standard starts, the same perturbed ones) and, with ``eval.record=final``,
+        recorded its episode; else ``None``."""
+        if self.best is None or self.cfg.eval.record == "final":
+            return None
+        kept = next(r for r in self.records if r["frames"] == self.best["frames"])
+        check = self.cfg.eval
+        conditions = {
+            name: float(condition.get("duration", check.perturbed_duration))
+            for name, condition in self.conditions.items()
+        }
+        ran = {name: p["duration"] for name, p in kept.get("perturbed", {}).items()}
+        return kept if kept["duration"] == duration and ran == conditions else None
 
     def _episodes(
         self, policy: ActorPolicy, plan: list[tuple], logger: RerunLogger, root: str | None
@@ -152,17 +182,25 @@ def check_evaluations(cfg: DictConfig) -> None:
             f" eval.perturbed_duration={check.perturbed_duration} > 0"
         )
     make_juggle_env(cfg.env).close()  # the nominal env first: its keys blamed as env.KEY
-    for name, overrides in conditions.items():  # fail now, not at the first evaluation
+    for name, condition in conditions.items():  # fail now, not at the first evaluation
+        if "seeds" in condition:
+            check_number(f"eval.perturbed.{name}.seeds", condition["seeds"], 1, integer=True)
         try:
-            make_juggle_env(cfg.env, **overrides).close()
+            make_juggle_env(cfg.env, **env_arguments(condition)).close()
         except (ValueError, TypeError) as error:
             raise ValueError(f"eval.perturbed.{name}: {error}") from None
 
 
 def perturbed_conditions(cfg: DictConfig) -> dict:
-    """``eval.perturbed``: condition name -> env arguments; none when the key is deleted
-    (``~eval.perturbed``) or empty."""
+    """``eval.perturbed``: condition name -> env arguments (and, for evaluations, ``seeds``);
+    none when the key is deleted (``~eval.perturbed``) or empty."""
     return dict(cfg.eval.get("perturbed") or {})
+
+
+def env_arguments(condition) -> dict:
+    """A perturbed condition's env arguments: all its keys but ``seeds``, the number of
+    evaluation episodes under it (envs that train under the condition ignore that)."""
+    return {key: value for key, value in condition.items() if key != "seeds"}
 
 
 def score(record: dict) -> list[float]:

@@ -23,8 +23,9 @@ then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
 | ``trains`` | the part of the actor the stage's updates train: ``base`` (default), or the
   ``correction`` on top of a frozen base (``actor.correction``) |
 | ``n_steps`` | RL stages: critic targets from this many steps of rewards (default 1) |
-| ``perturbed`` | name: env arguments (as ``eval.perturbed``); the stage's envs are split evenly
-  among the nominal env and these, so it trains under what evaluations judge |
+| ``perturbed`` | name: env arguments (as ``eval.perturbed``, whose ``seeds`` it ignores); the
+  stage's envs are split evenly among the nominal env and these, so it trains under what
+  evaluations judge |
 | ``stop`` | end the stage early, at one of its evaluations (``StopRule``): ``throws``, once an
   evaluation catches the ball and its score's throws (the nominal and perturbed episodes averaged,
   ``jugglerl.batch.evaluations.score``) reach it; ``patience``, after that many evaluations in a
@@ -43,7 +44,7 @@ from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
-from jugglerl.batch.evaluations import score
+from jugglerl.batch.evaluations import env_arguments, score
 from jugglerl.offpolicy.who_acts import check_who_acts
 from jugglerl_envs.validation import check_number
 
@@ -254,4 +255,4 @@ def _variants(perturbed, where: str) -> tuple[dict, ...]:
     if not isinstance(perturbed, Mapping):
         raise ValueError(f"{where}.perturbed must map names to env arguments")
     conditions = OmegaConf.to_container(OmegaConf.create(dict(perturbed)), resolve=True)
-    return ({}, *conditions.values())
+    return ({}, *(env_arguments(condition) for condition in conditions.values()))

@@ -78,6 +78,10 @@ def caught(metrics: EpisodeMetrics, catch_time: float) -> bool:
     return metrics.catches >= 1 and metrics.duration >= catch_time
 
 
+#: The keys of ``summarise_episodes``.
+SUMMARY_KEYS = ("catch_rate", "mean_throws", "mean_catches", "mean_time_to_drop")
+
+
 def summarise_episodes(episodes: list[EpisodeMetrics], catch_time: float) -> dict[str, float]:
     """``catch_rate`` (fraction ``caught``), ``mean_throws``, ``mean_catches`` and
     ``mean_time_to_drop`` (s; an episode that kept the ball counts its full duration)."""
