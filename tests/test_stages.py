@@ -55,7 +55,10 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert rl.cfg.optim.trains == "correction" and rl.cfg.actor.correction.max_correction == 0.002
     assert rl.cfg.algo.n_steps == 10 and bc.cfg.algo.n_steps == 1 and rl.cfg.algo.gamma == 0.99
     # the rl stage's envs are split among the nominal one and each evaluated perturbation
-    assert rl.variants == ({}, *[dict(c) for c in rl.cfg.eval.perturbed.values()])
+    # (a condition's number of evaluation episodes is no env argument)
+    conditions = [dict(c) for c in rl.cfg.eval.perturbed.values()]
+    assert conditions[2] == {"action_noise": 0.003, "seeds": 6}
+    assert rl.variants == ({}, *[{k: v for k, v in c.items() if k != "seeds"} for c in conditions])
     assert bc.variants == dagger.variants == ({},) and len(rl.variants) == 5
     assert bc.cfg.optim.lr_actor == 1e-3 and dagger.cfg.optim.lr_actor == 1e-4
     assert rl.cfg.optim.lr_actor == 1e-5 and rl.cfg.optim.lr_critic == 3e-4
