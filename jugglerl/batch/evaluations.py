@@ -5,16 +5,17 @@
 every evaluation, ``final`` at the run's last), and with ``eval.perturbed`` (name: env arguments)
 ``eval.perturbed_seeds`` episodes (or the condition's own ``seeds``) of ``eval.perturbed_duration``
 s (or the condition's own ``duration``) under each of those conditions, from env seeds
-``eval.perturbed_first_seed`` on: away
-from the seeds ``scripts/robustness.py`` measures on, so that a run is not selected on its
-benchmark. All the episodes, the recorded one too, run as one ``JuggleBatch``, the actor acting
-on every env in one forward pass per step. It keeps every evaluation's record, and with
-``eval.keep_best`` the weights of the best one, which the run then deploys instead of its last
-actor. An evaluation's score is the nominal episodes' catch rate (an actor must catch the ball from
-the standard start), then throws, then time up, each averaged over the nominal episodes and the
-perturbed conditions, a condition's throws and time scaled to the nominal episode's length (a tie
-goes to the later one): an actor that juggles only the nominal episode ranks below one that also
-juggles through noise and kicks. The off-policy and the on-policy trainers share it.
+``eval.perturbed_first_seed`` on: away from the seeds ``scripts/robustness.py`` measures on, so
+that a run is not selected on its benchmark. All the episodes, the recorded one too, run as one
+``JuggleBatch``, the actor acting on every env in one forward pass per step. It keeps every
+evaluation's record, and with ``eval.keep_best`` the weights of the best one, which the run then
+deploys instead of its last actor. An evaluation's score is the nominal episodes' catch rate (an
+actor must catch the ball from the standard start), then throws, then time up, each averaged over
+the nominal episodes and the perturbed conditions, a condition's throws and time scaled to the
+nominal episode's length (a tie goes to the later one): an actor that juggles only the nominal
+episode ranks below one that also juggles through noise and kicks. The run's final evaluation of a
+kept best repeats that evaluation's record when it ran the same episodes (they are deterministic).
+The off-policy and the on-policy trainers share it.
 """
 
 from __future__ import annotations

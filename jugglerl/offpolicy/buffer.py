@@ -39,8 +39,8 @@ class MemmapStorage(LazyMemmapStorage):
     """TorchRL's memory-mapped storage, read through plain tensor views of its maps.
 
     Indexing tensordict's ``MemoryMappedTensor`` does Python work per key and call (it keeps the
-    file name and index for pickling): with the 40 keys of a transition that was a third of the
-    time of sampling a batch. The views share the maps' memory, so they read what the storage
+    file name and index for pickling), and TorchRL's slice sampler reads every key of the sampled
+    rows three times per batch. The views share the maps' memory, so they read what the storage
     writes; saving and reopening still go through the maps."""
 
     def __init__(self, *args, **kwargs):
