@@ -151,6 +151,7 @@ def _run(script: str, run_dir: Path, *overrides: str) -> subprocess.CompletedPro
     return result
 
 
+@pytest.mark.slow
 def test_dps_on_ray_finds_the_same_command_as_locally(ray_cluster, tmp_path):
     _run("train.py", tmp_path / "local", *DPS)
     _run("train.py", tmp_path / "ray", *DPS, "cluster=ray", f"cluster.address={ray_cluster}")
@@ -163,6 +164,7 @@ def test_dps_on_ray_finds_the_same_command_as_locally(ray_cluster, tmp_path):
     ).read_text()
 
 
+@pytest.mark.slow
 def test_feedback_search_on_ray_finds_the_same_gains_as_locally(ray_cluster, tmp_path):
     _run("train.py", tmp_path / "local", *FEEDBACK)
     _run(
@@ -179,6 +181,7 @@ def test_feedback_search_on_ray_finds_the_same_gains_as_locally(ray_cluster, tmp
     assert remote["feedback"] == local["feedback"]
 
 
+@pytest.mark.slow
 def test_robustness_on_ray_measures_the_same_episodes_as_locally(ray_cluster, tmp_path):
     _run("robustness.py", tmp_path / "local", *ROBUSTNESS)
     _run(
@@ -195,6 +198,7 @@ def test_robustness_on_ray_measures_the_same_episodes_as_locally(ray_cluster, tm
     assert {row["family"] for row in local} == {"nominal", "kicks"}
 
 
+@pytest.mark.slow
 def test_a_sweep_on_ray_runs_each_job_into_its_own_run_directory(ray_cluster, tmp_path):
     result = run_script(
         "train.py",
@@ -214,6 +218,7 @@ def test_a_sweep_on_ray_runs_each_job_into_its_own_run_directory(ray_cluster, tm
     assert all((tmp_path / run / "train.rrd").stat().st_size > 0 for run in runs)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", ["train.py", "robustness.py"])
 def test_an_unreachable_cluster_is_one_error_line_naming_its_address(script, tmp_path):
     pytest.importorskip("ray", reason="Ray is not installed (pip install -e '.[ray]')")
