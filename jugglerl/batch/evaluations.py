@@ -91,9 +91,9 @@ class Evaluations:
         record["episodes"] = [episode.to_dict() for episode in nominal]
         if self.conditions:
             record["perturbed"] = {}
-            for name, overrides in self.conditions.items():
+            for name, condition in self.conditions.items():
                 runs = [m for (n, _, _), m in zip(plan, episodes, strict=True) if n == name]
-                seconds = float(overrides.get("duration", check.perturbed_duration))
+                seconds = self._seconds(condition)
                 perturbed = {"duration": seconds, **summarise_episodes(runs, check.catch_time)}
                 record["perturbed"][name] = perturbed
         return self._keep(record, logger)
@@ -114,13 +114,14 @@ class Evaluations:
         if self.best is None or self.cfg.eval.record == "final":
             return None
         kept = next(r for r in self.records if r["frames"] == self.best["frames"])
-        check = self.cfg.eval
-        conditions = {
-            name: float(condition.get("duration", check.perturbed_duration))
-            for name, condition in self.conditions.items()
-        }
+        conditions = {name: self._seconds(c) for name, c in self.conditions.items()}
         ran = {name: p["duration"] for name, p in kept.get("perturbed", {}).items()}
         return kept if kept["duration"] == duration and ran == conditions else None
+
+    def _seconds(self, condition) -> float:
+        """How long a perturbed condition's episodes last: its own ``duration`` or
+        ``eval.perturbed_duration``."""
+        return float(condition.get("duration", self.cfg.eval.perturbed_duration))
 
     def _episodes(
         self, policy: ActorPolicy, plan: list[tuple], logger: RerunLogger, root: str | None
