@@ -95,13 +95,12 @@ def test_keys_are_looked_up_in_the_config_the_group_choices_compose():
         return unknown_key(arguments, "train", CONFIG_DIR)
 
     assert problem("algo=dps", "algo.episodes=4", "-m", "seed=0,1", "+eval.perturbed.x={}") is None
-    assert problem("hydra.run.dir=x", "~init_actor", "algo.stages.0.until=4") is None
+    assert problem("hydra.run.dir=x", "~init_actor", "algo.stages.bc.until=4") is None
     assert problem("algo.episodes=4").startswith(
         "algo.episodes=4: the config has no algo.episodes; algo has bc_tau,"
     )  # the default algo (apprentice) has none
-    assert (
-        problem("algo.stages.5.until=4")
-        == "algo.stages.5.until=4: the config has no algo.stages.5.until"
+    assert problem("algo.stages.rl.until=4") == (
+        "algo.stages.rl.until=4: the config has no algo.stages.rl.until; algo.stages has bc, dagger"
     )
     assert "the config has no foo.x; the config has actor, algo," in problem("foo.x=1")
     assert "repeat the run's group choices, e.g. algo=dps" in problem("resume=R", "algo.episodes=4")

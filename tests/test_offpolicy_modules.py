@@ -308,7 +308,7 @@ def test_command_reference_is_the_commands_action_at_each_time(lead_in):
 
 def residual_actor(**settings):
     overrides = (f"actor.{k}={v}" for k, v in settings.items())
-    cfg = train_config("actor=residual", "~actor.correction", *overrides)  # the residual alone
+    cfg = train_config("actor=residual", *overrides)
     actor = build_actor(cfg.actor, 18, 3)
     reference = CommandReference(load_command(cfg.actor.command))
     torch.manual_seed(0)

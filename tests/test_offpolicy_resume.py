@@ -17,19 +17,21 @@ from jugglerl.runs.checkpoints import load_checkpoint
 from jugglerl.runs.files import RunFileError
 from jugglerl.training import resume_state
 
-#: The default pipeline (a teacher, bc then DAgger, an LSTM on slices) in a few seconds: 4 envs
-#: of 64 steps a batch, a checkpoint every batch, bc to frame 512, DAgger to 1024.
+#: The apprentice pipeline with its rl stage (a teacher, bc then DAgger then residual RL, an LSTM
+#: on slices) in a few seconds: 4 envs of 64 steps a batch, a checkpoint every batch, bc to frame
+#: 512, DAgger to 1024.
 SHORT_APPRENTICE = (
+    "+experiment=apprentice_rl",
     "actor=lstm",
     "collector.num_envs=4",
     "collector.frames_per_batch=256",
     "replay_buffer.batch_size=128",
     "replay_buffer.slice_len=32",
-    "algo.stages.0.until=512",
-    "algo.stages.1.until=1024",
-    "algo.stages.0.optim.updates_per_batch=4",
-    "algo.stages.1.optim.updates_per_batch=4",
-    "algo.rl_stage.optim.updates_per_batch=4",
+    "algo.stages.bc.until=512",
+    "algo.stages.dagger.until=1024",
+    "algo.stages.bc.optim.updates_per_batch=4",
+    "algo.stages.dagger.optim.updates_per_batch=4",
+    "algo.stages.rl.optim.updates_per_batch=4",
     "algo.stop_cloning=null",
     "state.norm_frames=200",
     "env.duration=4",
@@ -64,7 +66,7 @@ def without_wall_times(metrics: dict) -> dict:
 def short_apprentice(total_frames: int):
     """``SHORT_APPRENTICE`` run to ``total_frames`` (past 1024, into the residual rl stage)."""
     budget = f"collector.total_frames={total_frames}"
-    return train_config(*SHORT_APPRENTICE, budget, "algo.rl_stage.warmup_frames=256")
+    return train_config(*SHORT_APPRENTICE, budget, "algo.stages.rl.warmup_frames=256")
 
 
 @pytest.mark.parametrize(
@@ -139,9 +141,9 @@ def test_a_buffer_whose_folder_is_gone_reopens_empty_and_the_resume_says_so(tmp_
 
 
 def test_a_resume_without_the_buffer_names_the_demonstrations_lost_with_it(tmp_path):
-    drawing = "algo.rl_stage.demo_fraction=0.25"
+    drawing = "+algo.stages.rl.demo_fraction=0.25"
     stages = stages_from_config(
-        train_config("algo=apprentice", "collector.total_frames=491520", drawing)
+        train_config("+experiment=apprentice_rl", "+algo.stages.bc.demonstrations=true", drawing)
     )
     gone = ReplayBuffer(600000, 64, folder=tmp_path)
 

@@ -35,7 +35,7 @@ def test_a_corrected_actor_starts_exactly_at_its_base():
     size = state_size(cfg.state)
     torch.manual_seed(0)
     corrected = build_actor(cfg.actor, size, 3)
-    base = build_actor(train_config("actor=lstm", "~actor.correction").actor, size, 3)
+    base = build_actor(train_config("actor=lstm").actor, size, 3)
     base.load_state_dict(corrected.state_dict(), strict=False)
     states = TensorDict(
         {
@@ -54,7 +54,7 @@ def test_a_corrected_actor_starts_exactly_at_its_base():
 def test_a_correction_leaves_the_runs_random_stream_and_base_weights_as_without_it():
     """So the cloning stages of a run with a correction repeat those of a run without."""
     draws = []
-    for overrides in (CORRECTED, ["actor=lstm", "~actor.correction"]):
+    for overrides in (CORRECTED, ["actor=lstm"]):
         cfg = train_config(*overrides)
         torch.manual_seed(0)
         actor = build_actor(cfg.actor, state_size(cfg.state), 3)
@@ -196,7 +196,7 @@ def _q(network, params, data):
 
 def test_a_perturbed_stage_splits_its_envs_among_the_conditions(tmp_path):
     conditions = "{noisy: {action_noise: 0.01}, kicked: {kick_rate: 1.0}}"
-    perturbed = f"+algo.stages=[{{name: rl, perturbed: {conditions}}}]"
+    perturbed = f"+algo.stages={{rl: {{perturbed: {conditions}}}}}"
     cfg = train_config(*TINY, "collector.num_envs=3", "collector.frames_per_batch=129", perturbed)
     training = OffPolicyTraining(cfg, tmp_path)
     settings = [training.env.base_env.batch.settings.env(i) for i in range(3)]

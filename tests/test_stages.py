@@ -20,19 +20,21 @@ from jugglerl.runs.checkpoints import load_checkpoint
 from jugglerl.training import resume_state
 from jugglerl_envs import JuggleEnv
 
-#: Three stages of 128 frames each, the critic warming up over the RL stage's first batch.
+#: Three stages of 128 frames each (+experiment=apprentice_rl), the critic warming up over the RL
+#: stage's first batch, which draws a quarter of its samples from the bc stage's demonstrations.
 STAGED = [
-    *TINY,
-    "algo=apprentice",
+    *(override for override in TINY if not override.startswith("algo=")),
+    "+experiment=apprentice_rl",
     "actor=mlp",
     "collector.total_frames=384",
-    "algo.stages.0.until=128",
-    "algo.stages.1.until=256",
-    "algo.rl_stage.warmup_frames=128",
-    "algo.rl_stage.demo_fraction=0.25",
-    "algo.rl_stage.bc_weight=1.0",
-    "algo.stages.0.optim.updates_per_batch=8",
-    "algo.rl_stage.optim.updates_per_batch=8",
+    "algo.stages.bc.until=128",
+    "algo.stages.dagger.until=256",
+    "algo.stages.rl.warmup_frames=128",
+    "+algo.stages.bc.demonstrations=true",
+    "+algo.stages.rl.demo_fraction=0.25",
+    "+algo.stages.rl.bc_weight=1.0",
+    "algo.stages.bc.optim.updates_per_batch=8",
+    "algo.stages.rl.optim.updates_per_batch=8",
     "eval.every_frames=0",
     "eval.perturbed_duration=2",
 ]
@@ -42,15 +44,13 @@ STAGED = [
 def test_the_apprentice_stages_clone_then_dagger_then_rl():
     default = stages_from_config(train_config("algo=apprentice"))
     assert [(s.name, s.end) for s in default] == [("bc", 327680), ("dagger", 368640)]
-    bc, dagger, rl = stages_from_config(
-        train_config("algo=apprentice", "collector.total_frames=491520")
-    )
+    bc, dagger, rl = stages_from_config(train_config("+experiment=apprentice_rl"))
     assert [s.name for s in (bc, dagger, rl)] == ["bc", "dagger", "rl"]
     assert (bc.start, bc.end, dagger.end, rl.end) == (0, 327680, 368640, 491520)
     assert bc.cfg.algo.loss == dagger.cfg.algo.loss == "bc" and rl.cfg.algo.loss == "ddpg"
     assert (bc.acts, bc.noise, dagger.acts, dagger.noise) == ("teacher", 0.003, "student", 0.0)
     assert (rl.acts, rl.noise) == ("student", 0.003) and "exploration" not in bc.cfg
-    assert bc.demonstrations and not rl.demonstrations and rl.demo_fraction == 0
+    assert not bc.demonstrations and rl.demo_fraction == 0  # no stage draws on demonstrations
     assert bc.cfg.optim.trains == dagger.cfg.optim.trains == "base"
     assert rl.cfg.optim.trains == "correction" and rl.cfg.actor.correction.max_correction == 0.002
     assert rl.cfg.algo.n_steps == 10 and bc.cfg.algo.n_steps == 1 and rl.cfg.algo.gamma == 0.99
@@ -65,14 +65,22 @@ def test_the_apprentice_stages_clone_then_dagger_then_rl():
     assert bc.cfg.optim.updates_per_batch == 256 and dagger.cfg.optim.updates_per_batch == 64
     assert rl.cfg.optim.updates_per_batch == 128 and rl.cfg.algo.bc_tau == 0.001
     assert rl.actor_frozen(rl.start + 61440) and not rl.actor_frozen(rl.start + 61441)
-    assert (
-        stages_from_config(
-            train_config("algo=apprentice", "algo.loss=td3", "collector.total_frames=491520")
-        )[2].cfg.algo.loss
-        == "td3"
-    )
-    short = stages_from_config(train_config("algo=apprentice", "collector.total_frames=340000"))
-    assert [(s.name, s.end) for s in short] == [("bc", 327680), ("dagger", 340000)]
+    td3 = train_config("+experiment=apprentice_rl", "algo.stages.rl.loss=td3")
+    assert stages_from_config(td3)[2].cfg.algo.loss == "td3"
+    short = train_config("+experiment=apprentice_rl", "collector.total_frames=340000")
+    assert [(s.name, s.end) for s in stages_from_config(short)] == [
+        ("bc", 327680),
+        ("dagger", 340000),
+    ]
+    (alone,) = stages_from_config(train_config("+experiment=finetune"))  # null stages do not run
+    assert (alone.name, alone.start, alone.end) == ("rl", 0, 122880)
+
+
+def test_the_default_run_composes_no_critic_and_no_correction():
+    """The rl stage's networks and settings come with +experiment=apprentice_rl alone."""
+    cfg = train_config()
+    assert "critic" not in cfg and "lr_critic" not in cfg.optim and "correction" not in cfg.actor
+    assert "gamma" not in cfg.algo and list(cfg.algo.stages) == ["bc", "dagger"]
 
 
 def test_plain_train_py_composes_the_quickstarts_lstm_apprentice():
@@ -93,35 +101,69 @@ def test_a_run_without_stages_is_one_stage_of_its_loss():
 @pytest.mark.parametrize(
     "override, message",
     [
-        ("algo.stages.1.until=100", "algo.stages[1].until=100 must be above"),
-        ("+algo.stages.0.epochs=3", "algo.stages[0]: unknown keys ['epochs']"),
-        ("algo.rl_stage.demo_fraction=1", "algo.stages[2].demo_fraction=1.0 must be in [0, 1)"),
-        ("algo.rl_stage.n_steps=0", "algo.stages[2].n_steps=0 must be >= 1"),
-        ("algo.rl_stage.perturbed=3", "algo.stages[2].perturbed must map names to env"),
-        ("algo.stages.0.demonstrations=false", "a demo_fraction needs a stage with demonstrations"),
-        ("algo.stages.0.acts=watcher", "algo.stages[0].acts=watcher must be one of teacher, stud"),
-        ("algo.stages.1.noise=-0.1", "algo.stages[1].noise=-0.1 must be a number >= 0"),
+        ("algo.stages.dagger.until=100", "algo.stages.dagger.until=100 must be above"),
+        ("+algo.stages.bc.epochs=3", "algo.stages.bc: unknown keys ['epochs']"),
+        ("algo.stages.rl.demo_fraction=1", "algo.stages.rl.demo_fraction=1.0 must be in [0, 1)"),
+        ("algo.stages.rl.n_steps=0", "algo.stages.rl.n_steps=0 must be >= 1"),
+        ("algo.stages.rl.perturbed=3", "algo.stages.rl.perturbed must map names to env"),
+        (
+            "algo.stages.bc.demonstrations=false",
+            "a demo_fraction needs a stage with demonstrations",
+        ),
+        ("algo.stages.bc.acts=watcher", "algo.stages.bc.acts=watcher must be one of teacher, stud"),
+        ("algo.stages.dagger.noise=-0.1", "algo.stages.dagger.noise=-0.1 must be a number >= 0"),
         ("optim.lr_actor=-1", "optim.lr_actor=-1 is out of range"),  # each stage sets its own
         ("optim.updates_per_batch=-1", "optim.updates_per_batch=-1 is out of range"),
-        ("algo.rl_stage.noise=loud", "algo.stages[2].noise=loud must be a number >= 0"),
+        ("algo.stages.rl.noise=loud", "algo.stages.rl.noise=loud must be a number >= 0"),
         (
-            "+algo.rl_stage.exploration.sigma_init=0.01",
-            "algo.stages[2]: a stage with acts does not explore (exploration keys given)",
+            "+algo.stages.rl.exploration.sigma_init=0.01",
+            "algo.stages.rl: a stage with acts does not explore (exploration keys given)",
         ),
-        ("teacher.policy=null", "algo.stages[0].acts=teacher needs a teacher.policy"),
-        ("~algo.stages.1.acts", "algo.stages[1].noise is the σ of who acts: it needs algo.stag"),
+        ("teacher.policy=null", "algo.stages.bc.acts=teacher needs a teacher.policy"),
+        (
+            "~algo.stages.dagger.acts",
+            "algo.stages.dagger.noise is the σ of who acts: it needs algo.stag",
+        ),
     ],
 )
 def test_bad_stage_settings_are_named(override, message):
     with pytest.raises(ValueError, match=re.escape(message)):
         stages_from_config(
             train_config(
-                "algo=apprentice",
-                "collector.total_frames=491520",
-                "algo.rl_stage.demo_fraction=0.25",
+                "+experiment=apprentice_rl",
+                "+algo.stages.bc.demonstrations=true",
+                "+algo.stages.rl.demo_fraction=0.25",
                 override,
             )
         )
+
+
+def test_stages_are_named_settings_and_a_bad_shape_is_named():
+    listed = train_config("algo=apprentice")
+    listed.algo.stages = [{"until": 128}]
+    with pytest.raises(ValueError, match=re.escape("algo.stages must map stage names to their")):
+        stages_from_config(listed)
+    scalar = train_config("algo=apprentice")
+    scalar.algo.stages.dagger = 3
+    with pytest.raises(ValueError, match=re.escape("algo.stages.dagger must map setting names")):
+        stages_from_config(scalar)
+
+
+def test_a_stage_whose_loss_lacks_its_settings_is_named_as_the_run_starts():
+    def problem(*overrides):
+        with pytest.raises(ValueError) as error:
+            stages_from_config(train_config(*overrides))
+        return str(error.value)
+
+    assert problem("+algo.stages.rl={loss: ddpg, acts: student}").startswith(
+        "algo.stages.rl: algo.loss=ddpg needs critic, optim.lr_critic, optim.weight_decay,"
+        " algo.gamma, algo.tau (configs/critic.yaml"
+    )
+    assert problem("+algo.stages.rl={loss: sac, acts: student}").startswith(
+        "algo.stages.rl: algo.loss='sac' is not available; choose one of bc, ddpg, td3"
+    )
+    assert problem("algo.bc_tau=1.5") == "algo.stages.bc: algo.bc_tau=1.5 must be in (0, 1] or null"
+    assert problem("algo=td3", "algo.policy_delay=0") == "algo.policy_delay=0 must be >= 1"
 
 
 @pytest.mark.slow
@@ -167,10 +209,10 @@ def test_the_default_pipeline_trains_only_the_correction_in_rl_and_resumes_insid
     correction does."""
     cfg = train_config(
         *STAGED,
-        "algo.rl_stage.warmup_frames=0",
+        "algo.stages.rl.warmup_frames=0",
         "actor=lstm",
         "replay_buffer.slice_len=16",
-        "algo.rl_stage.optim.lr_actor=1e-2",
+        "algo.stages.rl.optim.lr_actor=1e-2",
     )
     cfg.collector.total_frames = 384  # stop after the first rl batch
     _, first = train(cfg, tmp_path / "run")
@@ -193,17 +235,16 @@ def test_the_default_pipeline_trains_only_the_correction_in_rl_and_resumes_insid
 
 
 @pytest.mark.slow
-def test_a_resume_with_algo_loss_td3_runs_td3_in_the_rl_stage(tmp_path):
-    """The RL stage's loss is ``${algo.loss}``: a resume's override reaches it (the checkpoint keeps
-    the config's interpolations; with only the resolved config it stayed DDPG)."""
+def test_a_resume_with_a_stage_override_runs_td3_in_the_rl_stage(tmp_path):
+    """A resume's override of a stage's key reaches that stage."""
     cfg = train_config(*STAGED)
     cfg.collector.total_frames = 256  # stop after the DAgger stage
     train(cfg, tmp_path / "run")
-    overrides = ["collector.total_frames=384", "algo.loss=td3"]
+    overrides = ["collector.total_frames=384", "algo.stages.rl.loss=td3"]
     resumed, run_dir, state = resume_state(
         str(tmp_path / "run"), train_config(*STAGED, *overrides), overrides
     )
-    assert resumed.algo.stages[2].loss == "td3" and resumed.collector.total_frames == 384
+    assert resumed.algo.stages.rl.loss == "td3" and resumed.collector.total_frames == 384
     metrics, again = train(resumed, run_dir, state)
     assert again.stage.name == "rl" and type(again.update).__name__ == "TD3"
     again.close()
@@ -211,7 +252,7 @@ def test_a_resume_with_algo_loss_td3_runs_td3_in_the_rl_stage(tmp_path):
 
 @pytest.mark.slow
 def test_a_stage_starts_from_the_average_the_stage_before_deploys(tmp_path):
-    cfg = train_config(*STAGED, "algo.bc_tau=0.5", "algo.stages.1.optim.updates_per_batch=0")
+    cfg = train_config(*STAGED, "algo.bc_tau=0.5", "algo.stages.dagger.optim.updates_per_batch=0")
     cfg.collector.total_frames = 128  # the BC stage alone
     _, training = train(cfg, tmp_path / "run")
     average = training.update.target_actor().state_dict()
@@ -294,7 +335,7 @@ EARTH_STAGED = [
     "collector.num_envs=4",
     "collector.frames_per_batch=128",
     "checkpoint_every_frames=128",
-    "algo.stages.0.until=128",
+    "algo.stages.bc.until=128",
     "eval.every_frames=0",
     "eval.perturbed_duration=2",
 ]
@@ -350,7 +391,7 @@ def test_a_stop_rule_ends_a_stage_on_its_target_or_when_evaluations_stop_improvi
 
 
 def test_a_stage_that_stops_early_moves_the_later_ones_and_keeps_their_lengths():
-    stages = stages_from_config(train_config("algo=apprentice", "collector.total_frames=491520"))
+    stages = stages_from_config(train_config("+experiment=apprentice_rl"))
     bc, dagger, rl = stopped_early(stages, {0: 81920})
     assert (bc.start, bc.end) == (0, 81920)
     assert (dagger.start, dagger.end) == (81920, 81920 + 40960)
@@ -362,15 +403,15 @@ def test_a_stage_that_stops_early_moves_the_later_ones_and_keeps_their_lengths()
 @pytest.mark.parametrize(
     "stop, message",
     [
-        ("{throws: 0}", "algo.stages[0].stop.throws=0 is out of range"),
-        ("{patience: 0}", "algo.stages[0].stop.patience=0 is out of range"),
-        ("{throws: 52, after: 3}", "algo.stages[0].stop: a mapping of throws and/or patience"),
-        ("3", "algo.stages[0].stop: a mapping of throws and/or patience"),
+        ("{throws: 0}", "algo.stages.bc.stop.throws=0 is out of range"),
+        ("{patience: 0}", "algo.stages.bc.stop.patience=0 is out of range"),
+        ("{throws: 52, after: 3}", "algo.stages.bc.stop: a mapping of throws and/or patience"),
+        ("3", "algo.stages.bc.stop: a mapping of throws and/or patience"),
     ],
 )
 def test_bad_stop_rules_are_named(stop, message):
     with pytest.raises(ValueError, match=re.escape(message)):
-        stages_from_config(train_config("algo=apprentice", f"algo.stages.0.stop={stop}"))
+        stages_from_config(train_config("algo=apprentice", f"algo.stages.bc.stop={stop}"))
 
 
 #: BC evaluated after every batch of 128 frames and told to stop at its second evaluation that
@@ -378,11 +419,11 @@ def test_bad_stop_rules_are_named(stop, message):
 STOPPING = [
     *STAGED,
     "collector.total_frames=1280",
-    "algo.stages.0.until=1024",
-    "algo.stages.1.until=1152",
+    "algo.stages.bc.until=1024",
+    "algo.stages.dagger.until=1152",
     "eval.every_frames=128",
     "eval.seeds=1",
-    "algo.stages.0.stop={patience: 1}",
+    "algo.stages.bc.stop={patience: 1}",
 ]
 
 

@@ -35,7 +35,6 @@ OPEN_MAPPINGS = (
     "algo.teacher_perturbed",
     "algo.student_perturbed",
     "algo.stages",
-    "algo.rl_stage",
     "families",
     "hydra",
 )

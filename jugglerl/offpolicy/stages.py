@@ -2,11 +2,12 @@
 
 Learning from a teacher goes through stages (``configs/algo/apprentice.yaml``): behaviour cloning
 while the teacher acts, DAgger while the student acts and the teacher labels what it visits,
-then RL from the cloned actor. Each stage of ``algo.stages`` is a mapping
+then RL from the cloned actor (``+experiment=apprentice_rl``). ``algo.stages`` maps each stage's
+name (shown on the progress bar and in the history) to its settings, in the order they run, so
+that a config adds a stage as a key and drops one by setting it to ``null``. A stage's settings:
 
 | key | meaning |
 | --- | --- |
-| ``name`` | shown on the progress bar and in the history |
 | ``until`` | frame count at which the stage ends (the last: ``collector.total_frames``, which
   also cuts a stage short or leaves the later ones for a resume to reach) |
 | ``loss`` | the ``algo.loss`` the stage updates with (``bc``, ``ddpg``, ``td3``) |
@@ -45,11 +46,11 @@ from dataclasses import dataclass
 from omegaconf import DictConfig, OmegaConf
 
 from jugglerl.batch.evaluations import env_arguments, score
+from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.who_acts import check_who_acts
 from jugglerl_envs.validation import check_number
 
 STAGE_KEYS = {
-    "name",
     "until",
     "loss",
     "acts",
@@ -137,26 +138,29 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
     """The run's stages (module docstring); bad stage settings raise ``ValueError`` naming them."""
     total = cfg.collector.total_frames
     specs = cfg.algo.get("stages")
+    if specs is not None and not isinstance(specs, Mapping):
+        raise ValueError(f"algo.stages must map stage names to their settings, not {specs}")
+    specs = {name: spec for name, spec in (specs or {}).items() if spec is not None}
+    named = bool(specs)  # errors name the stage, or the algorithm's keys of a one-stage run
     if not specs:
-        specs = [{"name": cfg.algo.name, "loss": cfg.algo.loss}]
+        specs = {cfg.algo.name: {"loss": cfg.algo.loss}}
     _check_optim(cfg.optim, {}, "algo")  # also where every stage sets its own
     stages, start = [], 0
-    for index, spec in enumerate(specs):
-        where = f"algo.stages[{index}]"
+    for index, (name, spec) in enumerate(specs.items()):
+        where = f"algo.stages.{name}"
+        if not isinstance(spec, Mapping):
+            raise ValueError(f"{where} must map setting names to values (or be null), not {spec}")
         unknown = set(spec) - STAGE_KEYS
         if unknown:
             raise ValueError(
                 f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(STAGE_KEYS)}"
             )
-        if start >= total:  # a shorter run ends before this stage (a resume may reach it)
-            break
         last = index == len(specs) - 1
-        end = total if last else spec.get("until")
-        if end is None or end <= start:
+        end = max(total, start) if last else spec.get("until")
+        if not last and (end is None or end <= start):
             raise ValueError(
                 f"{where}.until={end} must be above the previous stage's end ({start})"
             )
-        end = min(end, total)
         stage_cfg = copy.deepcopy(cfg)
         OmegaConf.set_struct(stage_cfg, False)
         stage_cfg.algo.loss = spec.get("loss", cfg.algo.loss)
@@ -171,13 +175,17 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage_cfg.algo.n_steps = int(spec.get("n_steps", cfg.algo.get("n_steps", 1)))
         if stage_cfg.algo.n_steps < 1:
             raise ValueError(f"{where}.n_steps={stage_cfg.algo.n_steps} must be >= 1")
+        try:
+            LOSSES.get(stage_cfg.algo.loss).check_config(stage_cfg)
+        except ValueError as error:
+            raise ValueError(f"{where}: {error}" if named else str(error)) from None
         fraction = float(spec.get("demo_fraction", 0.0))
         if not 0 <= fraction < 1:
             raise ValueError(f"{where}.demo_fraction={fraction} must be in [0, 1)")
         stages.append(
             Stage(
                 index=index,
-                name=str(spec.get("name", f"stage {index}")),
+                name=str(name),
                 start=start,
                 end=int(end),
                 cfg=stage_cfg,
@@ -196,7 +204,9 @@ def stages_from_config(cfg: DictConfig) -> list[Stage]:
         stage.demonstrations for stage in stages
     ):
         raise ValueError("algo.stages: a demo_fraction needs a stage with demonstrations: true")
-    return stages
+    # a shorter run ends before the stages past its budget (checked all the same: a resume with
+    # a larger collector.total_frames reaches them)
+    return [dataclasses.replace(s, end=min(s.end, total)) for s in stages if s.start < total]
 
 
 def stopped_early(stages: list[Stage], stops: Mapping[int, int]) -> list[Stage]:

@@ -63,12 +63,17 @@ class BehaviourCloning(Update):
     (docs/results/apprentice.md).
     """
 
+    @classmethod
+    def check_config(cls, cfg) -> None:
+        tau = cfg.algo.get("bc_tau")
+        if tau is not None and not 0 < tau <= 1:
+            raise ValueError(f"algo.bc_tau={tau} must be in (0, 1] or null")
+
     def __init__(self, actor, state_size, action_spec, cfg, recurrent: bool = False):
+        self.check_config(cfg)
         super().__init__(CloningModule(actor), actor.parameters(), None, cfg.optim, tau=None)
         self.recurrent = recurrent
         tau = cfg.algo.get("bc_tau")  # runs saved before the key existed had none
-        if tau is not None and not 0 < tau <= 1:
-            raise ValueError(f"algo.bc_tau={tau} must be in (0, 1] or null")
         self.average = (
             None
             if tau is None

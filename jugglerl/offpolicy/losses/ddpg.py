@@ -21,8 +21,12 @@ from jugglerl.offpolicy.losses.update import Update, check_rl_config
 
 @LOSSES.register("ddpg")
 class DDPG(Update):
+    @classmethod
+    def check_config(cls, cfg) -> None:
+        check_rl_config(cfg)
+
     def __init__(self, actor, state_size, action_spec, cfg, recurrent: bool = False):
-        check_rl_config(cfg.algo)
+        self.check_config(cfg)
         critic = make_critic(cfg.critic, state_size, action_spec.shape[-1])
         loss = DDPGLoss(actor, critic, delay_actor=True, delay_value=True)
         loss.make_value_estimator(ValueEstimators.TD0, gamma=cfg.algo.gamma)

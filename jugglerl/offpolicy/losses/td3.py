@@ -28,11 +28,15 @@ from jugglerl.offpolicy.losses.update import Update, check_rl_config
 
 @LOSSES.register("td3")
 class TD3(Update):
+    @classmethod
+    def check_config(cls, cfg) -> None:
+        check_rl_config(cfg, ("algo.policy_delay", "algo.policy_noise", "algo.noise_clip"))
+        if cfg.algo.policy_delay < 1:
+            raise ValueError(f"algo.policy_delay={cfg.algo.policy_delay} must be >= 1")
+
     def __init__(self, actor, state_size, action_spec, cfg, recurrent: bool = False):
+        self.check_config(cfg)
         algo = cfg.algo
-        check_rl_config(algo)
-        if algo.policy_delay < 1:
-            raise ValueError(f"algo.policy_delay={algo.policy_delay} must be >= 1")
         critic = make_critic(cfg.critic, state_size, action_spec.shape[-1])
         loss = TD3Loss(
             actor,

@@ -10,7 +10,7 @@ from __future__ import annotations
 import copy
 
 import torch
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 from tensordict.nn import TensorDictModule
 from torchrl.objectives import LossModule, SoftUpdate
 
@@ -40,7 +40,20 @@ class FlatSoftUpdate(SoftUpdate):
         torch._foreach_lerp_(self._target_leaves, self._source_leaves, 1 - self.eps)
 
 
-def check_rl_config(algo: DictConfig) -> None:
+#: What an RL loss reads beyond configs/offpolicy.yaml: configs/critic.yaml and the discounting.
+RL_KEYS = ("critic", "optim.lr_critic", "optim.weight_decay", "algo.gamma", "algo.tau")
+
+
+def check_rl_config(cfg: DictConfig, keys: tuple[str, ...] = ()) -> None:
+    """``ValueError`` for an RL loss's settings (``RL_KEYS`` and its own ``keys``) that are
+    missing or out of range."""
+    missing = [key for key in (*RL_KEYS, *keys) if OmegaConf.select(cfg, key) is None]
+    if missing:
+        raise ValueError(
+            f"algo.loss={cfg.algo.loss} needs {', '.join(missing)} (configs/critic.yaml and the"
+            " discounting, which algo=ddpg|td3 and +experiment=apprentice_rl compose)"
+        )
+    algo = cfg.algo
     if not 0 < algo.tau <= 1:
         raise ValueError(f"algo.tau={algo.tau} must be in (0, 1]")
     if not 0 <= algo.gamma < 1:
@@ -55,6 +68,11 @@ class Update:
     ``critic_params``, for the critics (``optim.lr_critic``, ``optim.weight_decay``); clipping
     at ``optim.max_grad_norm`` (``null``: none); soft targets of ``loss`` with ``algo.tau`` when
     it has targets."""
+
+    @classmethod
+    def check_config(cls, cfg: DictConfig) -> None:
+        """Raise ``ValueError`` naming a setting of ``cfg`` (a stage's) this loss cannot run with:
+        the stages check each stage's as the run starts, before any loss is built."""
 
     def __init__(
         self,
