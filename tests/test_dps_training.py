@@ -190,19 +190,21 @@ def test_training_keeps_the_best_command_and_logs_its_progress(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_short_search_keeps_its_result_to_the_last_bits(tmp_path):
+def test_a_short_search_keeps_its_result(tmp_path):
     """A change to sampling, constraints, roll-outs or the update rule moves these numbers (found
-    with torch 2.13.0, mujoco 4.0.1): it then owes the shipped searches' results a rerun."""
+    with torch 2.13.0, mujoco 4.0.1): it then owes the shipped searches' results a rerun. They are
+    kept to 1e-7: two hosts with the same packages differ from the ninth digit on (the vector
+    code numpy and MuJoCo pick for the CPU), and a change to the search moves them further."""
     overrides = ["algo.episodes=3", "algo.update=ereps", "algo.lead_in=0", "algo.reset_noise=0"]
     metrics, training = run_training(train_config(*SHORT, *overrides, "seed=0"), tmp_path)
     assert [r["best_throws"] for r in metrics["history"]] == [1, 2, 2]
     best = load_command(tmp_path / "best_command.yaml")
-    assert best.cycle == pytest.approx(2.9773808244412985, rel=1e-12, abs=0)
+    assert best.cycle == pytest.approx(2.9773808244412985, rel=1e-7, abs=0)
     assert [float(x) for point in best.via_points for x in point] == pytest.approx(
         [0.03304070560712154, -1.5634088749435882, 2.1417429577449956]
         + [1.498010759343621, -1.5703249868383242, 1.4983150834791938]
         + [1.9899373968317733, -1.5834465678529286, 2.146806920231029],
-        rel=1e-12,
+        rel=1e-7,
         abs=0,
     )
     mean = training.collector.distribution.mean.tolist()
@@ -210,7 +212,7 @@ def test_a_short_search_keeps_its_result_to_the_last_bits(tmp_path):
         [2.942609552606715, 0.0262064724345676, -1.5652097432865015, 2.14368142995656]
         + [1.500415004968148, -1.5740438168924789, 1.4975550233701238]
         + [1.9859691038300227, -1.5821140140732484, 2.1484550661261292],
-        rel=1e-12,
+        rel=1e-7,
         abs=0,
     )
 
