@@ -13,6 +13,7 @@ from test_offpolicy_training import TINY
 
 from jugglerl.networks.actors import build_actor
 from jugglerl.networks.actors.correction import BASE_ACTION, Correction
+from jugglerl.offpolicy.init_actor import load_base_weights
 from jugglerl.offpolicy.n_step import n_step_returns
 from jugglerl.offpolicy.training import OffPolicyTraining
 from jugglerl.policies.actor_file import read_actor_weights
@@ -220,3 +221,22 @@ def test_a_run_starts_from_a_shipped_actor(tmp_path):
     other = train_config(*tiny, "state.period=3.0")
     with pytest.raises(ValueError, match="init_actor=lstm_juggler: its state differs in period"):
         OffPolicyTraining(other, tmp_path)
+
+
+def test_an_actor_without_a_correction_starts_from_one_carrying_a_zero_or_refuses_a_trained_one():
+    """``lstm_centred`` was trained with the rl stage's zero correction on top: the default
+    actor (none) takes its base weights and leaves the correction out, unless it has trained."""
+    cfg = train_config()
+    assert "correction" not in cfg.actor
+    actor = build_actor(cfg.actor, state_size(cfg.state), 3)
+    shipped = read_actor_weights("lstm_centred")["policy"]
+    carried = [key for key in shipped if key not in actor.state_dict()]
+    assert carried and all(key.startswith("module.2.module.body.") for key in carried)
+    load_base_weights(actor, shipped, "lstm_centred")
+    for key, value in actor.state_dict().items():
+        assert torch.equal(value, shipped[key]), key
+    trained = dict(shipped)
+    last = max(carried, key=lambda key: int(key.split("body.")[1].split(".")[0]))
+    trained[last] = torch.full_like(shipped[last], 1e-3)
+    with pytest.raises(ValueError, match="init_actor=x: it carries a trained correction"):
+        load_base_weights(actor, trained, "x")

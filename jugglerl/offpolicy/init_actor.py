@@ -45,8 +45,19 @@ def initial_weights(cfg: DictConfig) -> dict:
 
 
 def load_base_weights(actor: nn.Module, weights: dict, spec: str) -> None:
-    """Load ``weights`` into ``actor``, leaving only a correction's parameters as they are."""
+    """Load ``weights`` into ``actor``. A correction of ``actor`` keeps its own parameters where
+    the weights have none; a correction the weights carry on top of a base like ``actor``'s
+    (the next module of its sequence) is left out when it is at its zero start, where it acts as
+    nothing, and refused when it has trained."""
+    on_top = f"module.{len(actor.module)}.module."
+    carried = {key: value for key, value in weights.items() if key.startswith(on_top)}
+    if carried and not _at_zero(carried):
+        raise ValueError(
+            f"init_actor={spec}: it carries a trained correction (actor.correction), which this"
+            " actor lacks: start from it with the same actor.correction"
+        )
     missing, unexpected = actor.load_state_dict(weights, strict=False)
+    unexpected = [key for key in unexpected if key not in carried]
     own = {
         f"{name}.{key}"
         for name, module in actor.named_modules()
@@ -58,3 +69,9 @@ def load_base_weights(actor: nn.Module, weights: dict, spec: str) -> None:
             f"init_actor={spec}: its weights do not fit this actor"
             f" (missing {sorted(set(missing) - own)[:3]}, unexpected {sorted(unexpected)[:3]})"
         )
+
+
+def _at_zero(correction: dict) -> bool:
+    """Whether a correction's weights (``...body.<layer>.weight``/``bias``) end in a zero layer."""
+    last = max(int(key.split("body.")[1].split(".")[0]) for key in correction)
+    return all(not value.any() for key, value in correction.items() if f"body.{last}." in key)
