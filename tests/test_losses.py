@@ -5,13 +5,16 @@ import math
 import pytest
 import torch
 from cli import train_config
+from tensordict import TensorDict
 from torchrl.envs.utils import ExplorationType, set_exploration_type
+from torchrl.modules import set_recurrent_mode
 
 from jugglerl.batch.env_stack import make_env
 from jugglerl.networks.actors import build_actor
+from jugglerl.networks.plain import PlainActor, starts_inside
 from jugglerl.offpolicy.buffer import ReplayBuffer
 from jugglerl.offpolicy.losses import LOSSES
-from jugglerl.offpolicy.losses.bc import TEACHER_ACTION
+from jugglerl.offpolicy.losses.bc import TEACHER_ACTION, behaviour_cloning_loss
 from jugglerl.state.transforms import state_size
 
 SMALL = ["algo=ddpg", "env.duration=6", "state.norm_frames=200", "collector.num_envs=2"]
@@ -192,3 +195,43 @@ def test_an_lstm_update_runs_on_sub_trajectories(algo):
 def test_an_unknown_loss_names_the_valid_ones():
     with pytest.raises(ValueError, match="algo.loss='sac' is not available; choose one of bc,"):
         LOSSES.get("sac")
+
+
+def cloning_batch(pieces: int = 8, steps: int = 16) -> TensorDict:
+    """Sub-trajectories of the default LSTM actor's inputs and a teacher's actions."""
+    size = state_size(train_config().state)
+    return TensorDict(
+        {
+            "state": torch.randn(pieces, steps, size),
+            "recurrent_state_h": torch.randn(pieces, steps, 1, 128),
+            "recurrent_state_c": torch.randn(pieces, steps, 1, 128),
+            "is_init": torch.zeros(pieces, steps, 1, dtype=torch.bool),
+            TEACHER_ACTION: torch.rand(pieces, steps, 3) * 2 - 1,
+        },
+        [pieces, steps],
+    )
+
+
+def test_cloning_on_plain_tensors_gives_the_actors_loss_and_gradients_bit_for_bit():
+    cfg = train_config()
+    torch.manual_seed(0)
+    actor = build_actor(cfg.actor, state_size(cfg.state), 3)
+    plain = PlainActor(actor, sequences=True)
+    batch = cloning_batch()
+    batch["is_init"][:, 0] = torch.rand(8, 1) < 0.5  # episodes may start at a piece's first step
+
+    def loss_and_gradients(plain_actor):
+        actor.zero_grad()
+        with set_recurrent_mode(True):
+            loss = behaviour_cloning_loss(actor, batch, plain_actor)
+        loss.backward()
+        return loss.detach(), [p.grad.clone() for p in actor.parameters()]
+
+    (loss, gradients), (plain_loss, plain_gradients) = map(loss_and_gradients, (None, plain))
+    assert torch.equal(plain_loss, loss)
+    assert all(map(torch.equal, plain_gradients, gradients))
+    assert not starts_inside(batch["is_init"])
+    batch["is_init"][3, 7] = True  # an episode starting inside a piece: TorchRL splits it
+    assert starts_inside(batch["is_init"])
+    split, plain_split = map(loss_and_gradients, (None, plain))
+    assert torch.equal(plain_split[0], split[0]) and not torch.equal(split[0], loss)

@@ -125,6 +125,20 @@ def test_a_buffer_reopened_from_its_folder_samples_what_it_sampled_before_the_ki
     assert torch.equal(after["collector", "traj_ids"], before["collector", "traj_ids"])
 
 
+@pytest.mark.parametrize("slice_len", [None, 16])
+def test_a_buffer_sampled_for_some_keys_gives_those_of_the_same_frames(tmp_path, slice_len):
+    buffer = ReplayBuffer(1000, 64, slice_len=slice_len, folder=tmp_path)
+    batch = frames(torch.arange(8).repeat_interleave(32).reshape(4, 64))
+    buffer.extend(batch.set("other", torch.rand(batch.shape)))
+    torch.manual_seed(0)
+    whole, after_whole = buffer.sample(), torch.rand(3)
+    torch.manual_seed(0)
+    some, after_some = buffer.sample(keys=["value"]), torch.rand(3)
+    assert set(some.keys()) == {"value"} and some.shape == whole.shape
+    assert torch.equal(some["value"], whole["value"])
+    assert torch.equal(after_some, after_whole)  # the same draws: a run's later ones stay
+
+
 def test_a_buffer_whose_folder_is_gone_reopens_empty_and_the_resume_says_so(tmp_path):
     buffer = ReplayBuffer(1000, 64, slice_len=16, folder=tmp_path / "kept")
     buffer.extend(frames(torch.arange(8).repeat_interleave(32).reshape(4, 64)))

@@ -1,4 +1,4 @@
-"""``PlainActor``: an actor's modules run one step on plain tensors, without TensorDicts.
+"""``PlainActor``: an actor's modules run on plain tensors, without TensorDicts.
 
 An actor (``jugglerl.networks.actors``) is a ``TensorDictSequential`` of modules that read and
 write named entries: ``TensorDictModule`` s around plain ``nn.Module`` s, and TorchRL's
@@ -7,6 +7,12 @@ one env (about 85 % of a deployed step). ``PlainActor`` holds the same modules (
 parameters, shared) and passes the named tensors between them in a dict, calling each module's
 own network: an ``LSTMModule`` as its ``nn.LSTM`` on a sequence of one step, as TorchRL does
 outside recurrent mode. So its actions equal the actor's bit for bit, and it traces to a file.
+
+With ``sequences`` it runs sub-trajectories ``[B, T]`` instead, as TorchRL's recurrent mode runs
+the pieces of one episode each that the replay buffer samples: the ``nn.LSTM`` over each piece
+from the recurrent state stored at its first step (about half the time of a cloning update's
+forward pass goes to the TensorDicts around it). A piece in which an episode starts after its
+first step needs TorchRL's splitting (``starts_inside``): the caller runs the actor instead.
 """
 
 from __future__ import annotations
@@ -37,6 +43,19 @@ class _LSTMStep(nn.Module):
         values[next_cell_key] = cell_out.transpose(0, 1)
 
 
+class _LSTMSequence(_LSTMStep):
+    """An ``LSTMModule``'s ``nn.LSTM`` over sub-trajectories ``[B, T, in]``, each from the
+    recurrent state stored at its first step, as TorchRL runs it in recurrent mode."""
+
+    def forward(self, values: dict) -> None:
+        value_key, hidden_key, cell_key = self.in_keys
+        hidden = tuple(
+            values[key][:, 0].transpose(0, 1).contiguous() for key in (hidden_key, cell_key)
+        )
+        output, _ = self.lstm(values[value_key], hidden)
+        values[self.out_keys[0]] = output
+
+
 class _ModuleStep(nn.Module):
     """A ``TensorDictModule``'s own network, called on the tensors under its keys."""
 
@@ -56,14 +75,16 @@ class _ModuleStep(nn.Module):
 
 class PlainActor(nn.Module):
     """``forward(values)``: ``values`` (``state``, ``time``, the recurrent state) with the
-    actor's outputs added (``action``, ``("next", key)`` for each recurrent key)."""
+    actor's outputs added (``action``; one step at a time, ``("next", key)`` for each recurrent
+    key)."""
 
-    def __init__(self, actor: TensorDictSequential):
+    def __init__(self, actor: TensorDictSequential, sequences: bool = False):
         super().__init__()
+        self.in_keys = list(actor.in_keys)
         steps = []
         for module in actor.module:
             if isinstance(module, LSTMModule):
-                steps.append(_LSTMStep(module))
+                steps.append(_LSTMSequence(module) if sequences else _LSTMStep(module))
             elif isinstance(module, TensorDictModule):
                 steps.append(_ModuleStep(module))
             else:
@@ -75,3 +96,9 @@ class PlainActor(nn.Module):
         for step in self.steps:
             step(values)
         return values
+
+
+def starts_inside(is_init: torch.Tensor) -> bool:
+    """Whether an episode starts after the first step of a sub-trajectory of ``is_init``
+    (``[B, T, 1]``), where ``PlainActor(sequences=True)`` would carry a state across it."""
+    return bool(is_init[:, 1:].any())

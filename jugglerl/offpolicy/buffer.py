@@ -41,19 +41,21 @@ class MemmapStorage(LazyMemmapStorage):
     Indexing tensordict's ``MemoryMappedTensor`` does Python work per key and call (it keeps the
     file name and index for pickling), and TorchRL's slice sampler reads every key of the sampled
     rows three times per batch. The views share the maps' memory, so they read what the storage
-    writes; saving and reopening still go through the maps."""
+    writes; saving and reopening still go through the maps. ``get(index, keys)`` reads only the
+    entries ``keys`` name."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._views = self._views_of = None
 
-    def get(self, index):
+    def get(self, index, keys: list | None = None):
         if not self.initialized:
             return super().get(index)
         if self._views_of is not self._storage:  # built, or reopened from the files
             self._views = self._storage.apply(lambda tensor: tensor.as_subclass(torch.Tensor))
             self._views_of = self._storage
-        views = self._views if self._is_full else self._views[: self._len_along_dim0]
+        views = self._views if keys is None else self._views.select(*keys)
+        views = views if self._is_full else views[: self._len_along_dim0]
         return views[index]
 
 
@@ -86,7 +88,7 @@ class ReplayBuffer:
             )
         self.slice_len = slice_len
         self.batch_size = batch_size
-        sampler = (
+        self._sampler = (
             RandomSampler()
             if slice_len is None
             else SliceSampler(
@@ -104,7 +106,7 @@ class ReplayBuffer:
         )
         self._writer = RoundRobinWriter()
         self._buffer = TensorDictReplayBuffer(
-            storage=self._storage, sampler=sampler, writer=self._writer
+            storage=self._storage, sampler=self._sampler, writer=self._writer
         )
         self._longest_piece = 0  # steps of the longest trajectory piece stored so far
         self._last_id: torch.Tensor | None = None  # the id the storage ends with, and its run
@@ -163,11 +165,17 @@ class ReplayBuffer:
                 f" {free / 1e6:.0f} MB free for batches of {frames.bytes() / 1e6:.0f} MB)"
             )
 
-    def sample(self, fraction: float = 1.0) -> TensorDictBase:
-        """``fraction`` of a batch (rounded to whole sub-trajectories, at least one)."""
+    def sample(self, fraction: float = 1.0, keys: list | None = None) -> TensorDictBase:
+        """``fraction`` of a batch (rounded to whole sub-trajectories, at least one); with
+        ``keys``, the memory-mapped frames give only those entries (the same frames: the sampler
+        draws as TorchRL's buffer has it draw)."""
         unit = self.slice_len or 1
         count = max(1, round(self.batch_size * fraction / unit)) * unit
-        batch = self._buffer.sample(count)
+        if keys is None or not isinstance(self._storage, MemmapStorage):
+            batch = self._buffer.sample(count)
+        else:
+            index, _ = self._sampler.sample(self._storage, count)
+            batch = self._storage.get(index, keys)
         return batch if self.slice_len is None else batch.reshape(-1, self.slice_len)
 
     @property

@@ -238,11 +238,11 @@ class OffPolicyTraining(ActorTraining):
 
     def _sample(self):
         """A batch from the replay buffer, ``demo_fraction`` of it from the demonstrations."""
-        fraction = self.stage.demo_fraction
+        fraction, keys = self.stage.demo_fraction, self.update.reads
         if fraction == 0 or not self.demonstrations.sliceable:
-            return self.buffer.sample()
-        demos = self.demonstrations.sample(fraction)
-        return torch.cat([self.buffer.sample(1 - fraction), demos], dim=0)
+            return self.buffer.sample(keys=keys)
+        demos = self.demonstrations.sample(fraction, keys)
+        return torch.cat([self.buffer.sample(1 - fraction, keys), demos], dim=0)
 
     def frame_budget(self) -> int:
         return self.stages[-1].end  # collector.total_frames less what stopped stages saved

@@ -17,16 +17,23 @@ from torch.optim.swa_utils import AveragedModel, get_ema_multi_avg_fn
 from torchrl.modules import set_recurrent_mode
 from torchrl.objectives import LossModule
 
+from jugglerl.networks.plain import PlainActor, starts_inside
 from jugglerl.offpolicy.losses import LOSSES
 from jugglerl.offpolicy.losses.update import Update
 from jugglerl.offpolicy.teacher import TEACHER_ACTION
 
 
-def behaviour_cloning_loss(actor: TensorDictModule, batch: TensorDictBase) -> torch.Tensor:
-    """Mean squared error of ``actor``'s actions on ``batch`` from the teacher's."""
+def behaviour_cloning_loss(
+    actor: TensorDictModule, batch: TensorDictBase, plain: PlainActor | None = None
+) -> torch.Tensor:
+    """Mean squared error of ``actor``'s actions on ``batch`` from the teacher's; with ``plain``
+    (``actor`` on plain tensors, the same actions) it acts where it can."""
     if TEACHER_ACTION not in batch.keys(include_nested=True):
         raise ValueError("behaviour cloning needs a teacher in the loop (teacher.policy)")
-    predicted = actor(batch.select(*actor.in_keys, strict=False))["action"]
+    if plain is not None and not starts_inside(batch["is_init"]):
+        predicted = plain({key: batch[key] for key in plain.in_keys})["action"]
+    else:
+        predicted = actor(batch.select(*actor.in_keys, strict=False))["action"]
     return torch.nn.functional.mse_loss(predicted, batch[TEACHER_ACTION])
 
 
@@ -73,6 +80,9 @@ class BehaviourCloning(Update):
         self.check_config(cfg)
         super().__init__(CloningModule(actor), actor.parameters(), None, cfg.optim, tau=None)
         self.recurrent = recurrent
+        # a recurrent actor's sub-trajectories run on plain tensors (the same actions)
+        self.plain = PlainActor(actor, sequences=True) if recurrent else None
+        self.reads = [*actor.in_keys, TEACHER_ACTION]
         tau = cfg.algo.get("bc_tau")  # runs saved before the key existed had none
         self.average = (
             None
@@ -82,7 +92,7 @@ class BehaviourCloning(Update):
 
     def __call__(self, batch: TensorDictBase) -> dict[str, float]:
         with set_recurrent_mode(self.recurrent):
-            loss = self.loss(batch)
+            loss = behaviour_cloning_loss(self.loss.actor_network, batch, self.plain)
         self.apply(loss)
         if self.average is not None:
             self.average.update_parameters(self.loss.actor_network)

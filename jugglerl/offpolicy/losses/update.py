@@ -94,6 +94,8 @@ class Update:
             )
         )
         self.targets = None if tau is None else FlatSoftUpdate(loss, tau=tau)
+        #: the entries of a sampled batch the update reads (``None``: all of them)
+        self.reads: list | None = None
         self.bc_weight = 0.0  # the RL losses' cloning weight; a stage may anneal it
         self.actor_frozen = False  # a stage's critic warm-up: only the critics step
         self.max_grad_norm = optim_cfg.max_grad_norm
