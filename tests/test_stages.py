@@ -164,6 +164,9 @@ def test_a_stage_whose_loss_lacks_its_settings_is_named_as_the_run_starts():
     )
     assert problem("algo.bc_tau=1.5") == "algo.stages.bc: algo.bc_tau=1.5 must be in (0, 1] or null"
     assert problem("algo=td3", "algo.policy_delay=0") == "algo.policy_delay=0 must be >= 1"
+    assert problem("algo=bc", "algo.stages.bc.acts=student", "teacher.policy=null") == (
+        "algo.stages.bc: algo.loss=bc clones a teacher in the loop: set teacher.policy"
+    )
 
 
 @pytest.mark.slow

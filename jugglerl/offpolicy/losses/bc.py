@@ -72,6 +72,8 @@ class BehaviourCloning(Update):
 
     @classmethod
     def check_config(cls, cfg) -> None:
+        if cfg.teacher.policy is None:
+            raise ValueError("algo.loss=bc clones a teacher in the loop: set teacher.policy")
         tau = cfg.algo.get("bc_tau")
         if tau is not None and not 0 < tau <= 1:
             raise ValueError(f"algo.bc_tau={tau} must be in (0, 1] or null")
