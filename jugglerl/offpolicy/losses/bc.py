@@ -48,14 +48,12 @@ def add_cloning_term(total, actor, batch, weight: float, losses: dict) -> torch.
 
 
 class CloningModule(LossModule):
-    """A ``LossModule`` holding the actor, so that its weights checkpoint as the others' do."""
+    """A ``LossModule`` holding the actor, so that its weights checkpoint as the others' do (the
+    update computes ``behaviour_cloning_loss`` itself, on plain tensors where it can)."""
 
     def __init__(self, actor: TensorDictModule):
         super().__init__()
         self.actor_network = actor
-
-    def forward(self, batch: TensorDictBase) -> torch.Tensor:
-        return behaviour_cloning_loss(self.actor_network, batch)
 
 
 @LOSSES.register("bc")
