@@ -200,15 +200,24 @@ def fit_normalisation(env: EnvBase, frames: int) -> None:
 MIN_SCALE = 0.05
 
 
-def fit_normalisation_on(env: EnvBase, actor, frames: int, parts: tuple[str, ...]) -> None:
-    """Fit the observation normalisation on about ``frames`` steps of ``actor`` acting (its
-    deterministic action): the states a policy starting from it will meet first. ``parts`` are
-    the observation's parts the state keeps (``state.observe``)."""
+def fit_normalisation_on(
+    env: EnvBase,
+    policy,
+    frames: int,
+    parts: tuple[str, ...] | None,
+    exploration: ExplorationType = ExplorationType.DETERMINISTIC,
+) -> None:
+    """Fit the observation normalisation on about ``frames`` steps of ``policy`` acting (by
+    default its deterministic action): the states a policy starting from it will meet first.
+    ``parts`` are the juggling observation's parts the state keeps (``state.observe``); ``None``
+    for an env whose whole observation is the state."""
     steps = max(1, -(-frames // env.batch_size.numel()))
-    with torch.no_grad(), set_exploration_type(ExplorationType.DETERMINISTIC):
-        rollout = env.rollout(steps, actor, break_when_any_done=False)
+    with torch.no_grad(), set_exploration_type(exploration):
+        rollout = env.rollout(steps, policy, break_when_any_done=False)
     observation = rollout.get("observation").flatten(0, -2)
-    values = torch.cat([part_values(observation, part) for part in parts], dim=-1).float()
+    if parts is not None:
+        observation = torch.cat([part_values(observation, part) for part in parts], dim=-1)
+    values = observation.float()
     norm = normalisation(env)
     norm.loc.copy_(values.mean(dim=0))
     norm.scale.copy_(values.std(dim=0).clamp_min(MIN_SCALE))

@@ -52,8 +52,9 @@ class ActionAsLoc(TensorDictModuleBase):
         return tensordict.set(LOC, acted.get("action"))
 
 
-def make_agent(cfg: DictConfig, state_size: int) -> Agent:
-    """The actor ``cfg.actor``, the Gaussian policy around it and the critic ``cfg.critic``."""
+def make_agent(cfg: DictConfig, state_size: int, action_size: int = ACTION_SIZE) -> Agent:
+    """The actor ``cfg.actor``, the Gaussian policy around it and the critic ``cfg.critic``, on
+    a ``state`` of ``state_size`` and actions of ``action_size`` (the juggler's servos)."""
     if recurrent_state(cfg.actor):
         raise ValueError(
             f"actor={cfg.actor.name}: algo=ppo trains feed-forward actors (residual, mlp)"
@@ -61,8 +62,8 @@ def make_agent(cfg: DictConfig, state_size: int) -> Agent:
     sigma = cfg.algo.sigma_init
     if not 0 < sigma <= 1:
         raise ValueError(f"algo.sigma_init={sigma} must be in (0, 1] (normalised action units)")
-    actor = build_actor(cfg.actor, state_size, ACTION_SIZE)
-    scale = AddStateIndependentNormalScale(ACTION_SIZE, scale_lb=1e-6, init_value=math.log(sigma))
+    actor = build_actor(cfg.actor, state_size, action_size)
+    scale = AddStateIndependentNormalScale(action_size, scale_lb=1e-6, init_value=math.log(sigma))
     policy = ProbabilisticActor(
         TensorDictSequential(ActionAsLoc(actor), TensorModule(scale, [LOC], [LOC, SCALE])),
         in_keys=[LOC, SCALE],

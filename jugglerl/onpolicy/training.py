@@ -8,9 +8,9 @@ observation normalisation is fitted on the untrained policy's mean, i.e. the ref
 roll-outs, and kept for the run. Each batch is ``collector.frames_per_batch / num_envs`` steps of
 every env; the last step's state is carried to the next batch (``jugglerl.batch.collector``), so
 episodes run across batches (a drop is ``terminated``, the time limit ``truncated``: GAE
-bootstraps through it). The updates are TorchRL's ``GAE`` (once per batch) and ``ClipPPOLoss``
-(advantages normalised, an L2 critic) over ``algo.epochs`` passes of minibatches of
-``algo.minibatch_size``.
+bootstraps through it). The updates are ``jugglerl.onpolicy.update.PPOUpdate``: TorchRL's ``GAE``
+(once per batch) and ``ClipPPOLoss`` (advantages normalised, an L2 critic) over ``algo.epochs``
+passes of minibatches of ``algo.minibatch_size``.
 
 It writes to the run directory
 
@@ -30,12 +30,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
 from omegaconf import DictConfig
 from tensordict import TensorDict
-from torchrl.objectives import ClipPPOLoss
-from torchrl.objectives.value import GAE
 from tqdm import tqdm
 
 from jugglerl.batch.actor_training import ActorTraining
@@ -45,6 +42,7 @@ from jugglerl.batch.env_stack import fit_normalisation_on, make_env
 from jugglerl.batch.evaluations import Evaluations
 from jugglerl.onpolicy.agent import make_agent, policy_sigma
 from jugglerl.onpolicy.checks import check_config
+from jugglerl.onpolicy.update import PPOUpdate
 from jugglerl.onpolicy.variants import training_variants
 from jugglerl.recording.blueprint import onpolicy_curves
 from jugglerl.recording.logger import RerunLogger
@@ -57,8 +55,6 @@ from jugglerl_envs.batch import usable_cores
 
 #: The history entries the progress bar shows.
 POSTFIX = ("throws_per_minute", "throws", "sigma")
-#: What each update logs, as ``ClipPPOLoss`` names it.
-LOSS_KEYS = ("loss_objective", "loss_critic", "loss_entropy", "kl_approx", "clip_fraction")
 
 
 class PPOTraining(ActorTraining):
@@ -70,7 +66,7 @@ class PPOTraining(ActorTraining):
         self.cfg = cfg
         self.run_dir = Path(run_dir)
         torch.manual_seed(cfg.seed)
-        collect, algo = cfg.collector, cfg.algo
+        collect = cfg.collector
         size = normalised_size(cfg.state)
         norm = (
             state["normalisation"]
@@ -82,20 +78,7 @@ class PPOTraining(ActorTraining):
         self.collector = BatchCollector(self.env)
         self.collector.restart(cfg.seed)
         self.agent = make_agent(cfg, state_size(cfg.state))
-        self.advantage = GAE(
-            gamma=algo.gamma, lmbda=algo.lmbda, value_network=self.agent.critic, average_gae=False
-        )
-        self.loss = ClipPPOLoss(
-            self.agent.policy,
-            self.agent.critic,
-            clip_epsilon=algo.clip_epsilon,
-            entropy_bonus=algo.entropy_coeff > 0,
-            entropy_coeff=algo.entropy_coeff,
-            critic_coeff=algo.critic_coeff,
-            loss_critic_type="l2",
-            normalize_advantage=True,
-        )
-        self.optimizer = torch.optim.Adam(self.loss.parameters(), lr=cfg.optim.lr)
+        self.update = PPOUpdate(self.agent, cfg.algo, cfg.optim)
         self.evaluations = Evaluations(cfg, onpolicy_curves)
         self.batch_stats = BatchStats(cfg.env.timestep * cfg.env.frame_skip)
         self.frames = 0
@@ -153,33 +136,11 @@ class PPOTraining(ActorTraining):
         return self.collector.collect(self.agent.policy, steps)
 
     def _learn(self, batch: TensorDict) -> dict[str, float]:
-        """``algo.epochs`` passes of clipped PPO updates over ``batch``; mean losses."""
-        algo, optim = self.cfg.algo, self.cfg.optim
+        """The PPO updates of ``batch`` (``update``); their mean losses."""
         torch.set_num_threads(usable_cores())
-        if optim.anneal_lr:  # linearly to 0 at the end of the budget
-            done = (self.frames - batch.numel()) / self.cfg.collector.total_frames
-            for group in self.optimizer.param_groups:
-                group["lr"] = optim.lr * (1 - done)
-        parameters = list(self.loss.parameters())
-        totals: dict[str, list[float]] = {key: [] for key in LOSS_KEYS}
-        with torch.no_grad():
-            self.advantage(batch)  # once per batch, with the critic that collected it
-        flat = batch.reshape(-1)
-        for _ in range(algo.epochs):
-            for indices in torch.randperm(flat.numel()).split(algo.minibatch_size):
-                losses = self.loss(flat[indices])
-                objective = sum(losses[k] for k in LOSS_KEYS[:3] if k in losses)
-                self.optimizer.zero_grad()
-                objective.backward()
-                torch.nn.utils.clip_grad_norm_(parameters, self.cfg.optim.max_grad_norm)
-                self.optimizer.step()
-                self.updates += 1
-                for key in LOSS_KEYS:
-                    if key in losses:
-                        totals[key].append(float(losses[key].detach()))
-        record = {key: float(np.mean(values)) for key, values in totals.items() if values}
-        record["value"] = float(batch["state_value"].mean())
-        record["lr"] = self.optimizer.param_groups[0]["lr"]
+        done = (self.frames - batch.numel()) / self.cfg.collector.total_frames
+        record, steps = self.update(batch, done)
+        self.updates += steps
         return record
 
     def label(self) -> str:
@@ -196,14 +157,14 @@ class PPOTraining(ActorTraining):
                 "policy": self.agent.policy.state_dict(),
                 "critic": self.agent.critic.state_dict(),
             },
-            "optimizer": self.optimizer.state_dict(),
+            "optimizer": self.update.state_dict(),
             "collector": self.collector.state_dict(),
         }
 
     def load_state_dict(self, state: dict) -> None:
         self.agent.policy.load_state_dict(state["agent"]["policy"])
         self.agent.critic.load_state_dict(state["agent"]["critic"])
-        self.optimizer.load_state_dict(state["optimizer"])
+        self.update.load_state_dict(state["optimizer"])
         self.collector.load_state_dict(state["collector"])
         self.load_common_state(state)
 
