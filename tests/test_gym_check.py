@@ -1,7 +1,7 @@
-"""The Gymnasium sanity check (``jugglerl.onpolicy.gym_check``): its env follows the juggling
-env's conventions (actions in [-1, 1], a fall terminated, the time limit truncated), its
-evaluation counts each episode to its end, and its script trains, reports and refuses bad input
-in one line."""
+"""The Gymnasium sanity check (``jugglerl.gym_check``): its env follows the juggling env's
+conventions (actions in [-1, 1], a fall terminated, the time limit truncated), its evaluation
+counts each episode to its end, its learners are the trainers' own, and its script trains,
+reports and refuses bad input in one line."""
 
 import json
 
@@ -11,7 +11,11 @@ from cli import ROOT, run_script
 from hydra import compose, initialize_config_dir
 from tensordict import TensorDict
 
-from jugglerl.onpolicy.gym_check import GymCheck, first_episode_returns, make_task_env
+from jugglerl.gym_check.offpolicy import OffPolicyCheck
+from jugglerl.gym_check.ppo import PPOCheck
+from jugglerl.gym_check.task_env import first_episode_returns, make_task_env
+from jugglerl.offpolicy.losses.td3 import TD3
+from jugglerl.onpolicy.update import PPOUpdate
 
 
 def check_config(*overrides: str):
@@ -70,7 +74,8 @@ def test_the_untrained_policy_samples_around_its_actor_with_the_set_sigma():
         "norm_frames=64",
         "algo.sigma_init=0.5",
     )
-    check = GymCheck(cfg)
+    check = PPOCheck(cfg)
+    assert isinstance(check.update, PPOUpdate)
     states = TensorDict({"state": torch.randn(4096, 4)}, batch_size=[4096])
     acted = check.agent.policy(states)
     assert torch.allclose(acted["scale"], torch.full((4096, 1), 0.5))
@@ -98,8 +103,8 @@ def test_the_script_trains_and_reports_each_seed(tmp_path):
     assert done.returncode == 0, done.stderr
     lines = [line for line in done.stdout.splitlines() if line.startswith("InvertedPendulum")]
     assert [line.split(":")[0] for line in lines] == [
-        "InvertedPendulum-v5 seed 0",
-        "InvertedPendulum-v5 seed 1",
+        "InvertedPendulum-v5 ppo seed 0",
+        "InvertedPendulum-v5 ppo seed 1",
     ]
     records = json.loads(out.read_text())
     assert [r["frames"] for r in records] == [1024, 1024]
@@ -121,3 +126,27 @@ def test_bad_settings_fail_in_one_line(override, message):
     error = done.stderr.strip()
     assert error.startswith("error: ") and "\n" not in error
     assert message in error
+
+
+def test_the_offpolicy_check_updates_with_the_trainers_loss_after_its_random_frames():
+    cfg = check_config(
+        "learner=td3",
+        "task.id=InvertedPendulum-v5",
+        "collector.num_envs=2",
+        "collector.frames_per_batch=32",
+        "collector.init_random_frames=64",
+        "optim.updates_per_batch=2",
+        "norm_frames=64",
+    )
+    check = OffPolicyCheck(cfg)
+    assert isinstance(check.update, TD3)
+    check.collector.restart(0)
+    steps = []
+    for _ in range(3):
+        batch = check.collect(16)
+        check.frames += batch.numel()
+        check.learn(batch)
+        steps.append(check.update.updates)
+    assert steps == [0, 2, 4]  # none until 64 random frames are in the buffer, then two a batch
+    assert len(check.buffer) == 96
+    check.close()

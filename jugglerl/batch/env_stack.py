@@ -208,7 +208,8 @@ def fit_normalisation_on(
     exploration: ExplorationType = ExplorationType.DETERMINISTIC,
 ) -> None:
     """Fit the observation normalisation on about ``frames`` steps of ``policy`` acting (by
-    default its deterministic action): the states a policy starting from it will meet first.
+    default its deterministic action; ``None``: uniformly random actions): the states a policy
+    starting from it will meet first.
     ``parts`` are the juggling observation's parts the state keeps (``state.observe``); ``None``
     for an env whose whole observation is the state."""
     steps = max(1, -(-frames // env.batch_size.numel()))
