@@ -120,6 +120,7 @@ def test_the_script_trains_and_reports_each_seed(tmp_path):
         ("collector.frames_per_batch=100", "must be a multiple of collector.num_envs=8"),
     ],
 )
+@pytest.mark.slow
 def test_bad_settings_fail_in_one_line(override, message):
     done = run_script("benchmarks/gym_check.py", override, "progress=false")
     assert done.returncode == 1
@@ -128,6 +129,7 @@ def test_bad_settings_fail_in_one_line(override, message):
     assert message in error
 
 
+@pytest.mark.slow
 def test_the_offpolicy_check_updates_with_the_trainers_loss_after_its_random_frames():
     cfg = check_config(
         "learner=td3",
