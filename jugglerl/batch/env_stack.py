@@ -209,9 +209,8 @@ def fit_normalisation_on(
 ) -> None:
     """Fit the observation normalisation on about ``frames`` steps of ``policy`` acting (by
     default its deterministic action; ``None``: uniformly random actions): the states a policy
-    starting from it will meet first.
-    ``parts`` are the juggling observation's parts the state keeps (``state.observe``); ``None``
-    for an env whose whole observation is the state."""
+    starting from it will meet first. ``parts`` are the juggling observation's parts the state
+    keeps (``state.observe``); ``None`` for an env whose whole observation is the state."""
     steps = max(1, -(-frames // env.batch_size.numel()))
     with torch.no_grad(), set_exploration_type(exploration):
         rollout = env.rollout(steps, policy, break_when_any_done=False)
