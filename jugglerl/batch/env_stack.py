@@ -117,7 +117,12 @@ def check_collector(cfg: DictConfig) -> None:
             f"env.balls={cfg.env.balls}: the networks' state observes one ball (jugglerl/state);"
             " the trainers run with env.balls=1"
         )
-    collect = cfg.collector
+    check_batches(cfg.collector)
+
+
+def check_batches(collect: DictConfig) -> None:
+    """``ValueError`` naming the ``collector`` keys of batches that cannot be collected: each
+    batch a whole number of steps of every env, the budget at least one batch."""
     if collect.num_envs < 1:
         raise ValueError(f"collector.num_envs={collect.num_envs} must be >= 1")
     if collect.frames_per_batch < collect.num_envs or collect.frames_per_batch % collect.num_envs:

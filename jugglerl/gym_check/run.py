@@ -14,6 +14,7 @@ from tensordict import TensorDict
 from tqdm import tqdm
 
 from jugglerl.batch.collector import BatchCollector
+from jugglerl.batch.env_stack import check_batches
 from jugglerl.gym_check.task_env import evaluate_actor, make_task_env
 
 #: Training episodes the final training return averages (CleanRL's curves: returns at the end).
@@ -30,16 +31,10 @@ class TaskRun:
     actor = None
 
     def __init__(self, cfg: DictConfig):
-        collect = cfg.collector
-        batch, envs = collect.frames_per_batch, collect.num_envs
-        if envs < 1 or batch % envs or not 0 < batch <= collect.total_frames:
-            raise ValueError(
-                f"collector.frames_per_batch={batch} must be a multiple of collector.num_envs="
-                f"{envs} and at most collector.total_frames={collect.total_frames}"
-            )
+        check_batches(cfg.collector)
         self.cfg = cfg
         torch.manual_seed(cfg.seed)
-        self.env = make_task_env(cfg.task.id, envs)
+        self.env = make_task_env(cfg.task.id, cfg.collector.num_envs)
         self.env.set_seed(cfg.seed)
         self.collector = BatchCollector(self.env)
         self.frames = 0

@@ -41,6 +41,9 @@ class ClipToBounds(gym.ActionWrapper):
 
 def _normalised_actions(task_id: str) -> gym.Env:
     env = gym.make(task_id)
+    if not isinstance(env.action_space, gym.spaces.Box):
+        env.close()
+        raise ValueError(f"task.id={task_id}: the actors act on continuous (Box) action spaces")
     ones = np.ones(env.action_space.shape, dtype=np.float32)
     return ClipToBounds(gym.wrappers.RescaleAction(env, -ones, ones))
 
@@ -51,11 +54,9 @@ def make_task_env(
     """``num_envs`` copies of the Gymnasium env ``task_id`` as one TorchRL env of
     ``batch_size=[num_envs]`` (see the module docstring), standardised by ``loc``/``scale``."""
     try:
-        spec = gym.spec(task_id)
+        gym.spec(task_id)
     except gym.error.Error as error:
         raise ValueError(f"task.id={task_id}: {error}") from None
-    if not isinstance(gym.make(spec).action_space, gym.spaces.Box):
-        raise ValueError(f"task.id={task_id}: the actors act on continuous (Box) action spaces")
     makers = [partial(_normalised_actions, task_id)] * num_envs
     vector = gym.vector.SyncVectorEnv(makers, autoreset_mode=gym.vector.AutoresetMode.DISABLED)
     env = TransformedEnv(GymWrapper(vector))
